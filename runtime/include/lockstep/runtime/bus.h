@@ -1,0 +1,132 @@
+#pragma once
+// The middleware boundary. Services talk through a Bus: DdsBus (Fast DDS, for real
+// processes) or InProcessBus (in memory, for tests with no network). Fast DDS headers
+// stay behind this interface.
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <string>
+
+namespace lockstep {
+
+// QoS families; each is a pair of writer/reader profiles in deploy/qos/fastdds.xml
+// named "lockstep.<family>.writer" / ".reader" (docs/topics.md lists them).
+enum class QosKind {
+  kClock,       // RELIABLE, KEEP_LAST 1, TRANSIENT_LOCAL: tick, world info, run status, map
+  kAck,         // RELIABLE, KEEP_LAST 1, VOLATILE, liveliness MANUAL_BY_TOPIC 500 ms
+  kMembership,  // RELIABLE, KEEP_LAST 1, TRANSIENT_LOCAL: service announcements, snapshots
+  kCommand,     // RELIABLE, KEEP_LAST 256, VOLATILE: commands and replies
+  kState,       // RELIABLE, KEEP_LAST 4, TRANSIENT_LOCAL: ground / air state
+  kEvent,       // RELIABLE, KEEP_LAST 64, VOLATILE
+  kSensor,      // RELIABLE, KEEP_LAST 2, VOLATILE: images, point clouds
+};
+const char* QosFamilyName(QosKind kind);
+int QosHistoryDepth(QosKind kind);
+bool QosTransientLocal(QosKind kind);
+
+struct SampleInfo {
+  uint64_t writer_id = 0;  // identifies the DataWriter that wrote the sample
+};
+
+struct LivelinessChange {
+  uint64_t writer_id = 0;  // the writer whose liveliness changed
+  bool alive = false;      // false: lease expired or writer gone
+};
+
+// Type-erased operations on one message type; TypeOpsOf<T>() gives them (messages.h).
+struct TypeOps {
+  const char* type_name;
+  void* (*new_dds_type)();  // a new eprosima::fastdds::dds::TopicDataType
+  void* (*new_sample)();
+  void (*delete_sample)(void*);
+  void (*copy)(void* dst, const void* src);
+};
+
+class RawWriter {
+ public:
+  virtual ~RawWriter() = default;
+  virtual void Write(const void* sample) = 0;
+  virtual void AssertLiveliness() = 0;
+  virtual int MatchedReaders() const = 0;
+  virtual uint64_t id() const = 0;
+};
+
+class RawReader {
+ public:
+  virtual ~RawReader() = default;
+  virtual int MatchedWriters() const = 0;
+};
+
+using RawCallback = std::function<void(const void* sample, const SampleInfo& info)>;
+using LivelinessCallback = std::function<void(const LivelinessChange& change)>;
+
+class Bus {
+ public:
+  virtual ~Bus() = default;
+  virtual std::unique_ptr<RawWriter> CreateRawWriter(const std::string& topic, const TypeOps& ops,
+                                                     QosKind qos) = 0;
+  // Callbacks run on a middleware thread: keep them short and never block in them.
+  virtual std::unique_ptr<RawReader> CreateRawReader(const std::string& topic, const TypeOps& ops,
+                                                     QosKind qos, RawCallback on_sample,
+                                                     LivelinessCallback on_liveliness) = 0;
+  virtual std::string Describe() const = 0;
+};
+
+template <class T>
+const TypeOps& TypeOpsOf();
+
+template <class T>
+struct Topic {
+  const char* name;
+  QosKind qos;
+};
+
+template <class T>
+class Writer {
+ public:
+  Writer() = default;
+  Writer(Bus& bus, const Topic<T>& topic)
+      : raw_(bus.CreateRawWriter(topic.name, TypeOpsOf<T>(), topic.qos)) {}
+  void Write(const T& sample) { raw_->Write(&sample); }
+  void AssertLiveliness() { raw_->AssertLiveliness(); }
+  int MatchedReaders() const { return raw_->MatchedReaders(); }
+  uint64_t id() const { return raw_->id(); }
+  explicit operator bool() const { return raw_ != nullptr; }
+
+ private:
+  std::unique_ptr<RawWriter> raw_;
+};
+
+template <class T>
+class Reader {
+ public:
+  using Callback = std::function<void(const T&, const SampleInfo&)>;
+  Reader() = default;
+  Reader(Bus& bus, const Topic<T>& topic, Callback on_sample, LivelinessCallback on_liveliness = {})
+      : raw_(bus.CreateRawReader(
+            topic.name, TypeOpsOf<T>(), topic.qos,
+            [cb = std::move(on_sample)](const void* s, const SampleInfo& info) {
+              cb(*static_cast<const T*>(s), info);
+            },
+            std::move(on_liveliness))) {}
+  int MatchedWriters() const { return raw_->MatchedWriters(); }
+  explicit operator bool() const { return raw_ != nullptr; }
+
+ private:
+  std::unique_ptr<RawReader> raw_;
+};
+
+struct DdsOptions {
+  int domain_id = 0;
+  std::string profiles_file;                         // Fast DDS XML; empty = LOCKSTEP_QOS_FILE or the installed default
+  std::string participant_profile = "lockstep.participant";
+  std::string participant_name = "lockstep";
+};
+
+std::unique_ptr<Bus> CreateDdsBus(const DdsOptions& options);
+std::unique_ptr<Bus> CreateInProcessBus();
+
+// The QoS profile file compiled in for this build (deploy/qos/fastdds.xml).
+std::string DefaultQosFile();
+
+}  // namespace lockstep

@@ -1,0 +1,56 @@
+#pragma once
+// Every topic of the system: name, type and QoS family. docs/topics.md mirrors this list.
+#include "lockstep/msg/clock.h"
+#include "lockstep/msg/command.h"
+#include "lockstep/msg/common.h"
+#include "lockstep/msg/map.h"
+#include "lockstep/msg/sensor.h"
+#include "lockstep/msg/state.h"
+#include "lockstep/msg/world.h"
+#include "lockstep/runtime/bus.h"
+
+#define LOCKSTEP_MESSAGE_TYPES(X)                                                        \
+  X(Tick) X(Ack) X(ServiceAnnounce) X(ServiceSnapshot) X(RunStatus) X(FrameDone)         \
+  X(WorldInfo) X(MapData) X(Command) X(CommandReply) X(GroundState) X(AirState)          \
+  X(SimEvent) X(Image) X(PointCloud) X(RadarScan) X(Imu) X(Gnss) X(Barometer)            \
+  X(Magnetometer) X(CollisionEvent) X(LaneInvasionEvent) X(ObstacleDetection)
+
+namespace lockstep {
+
+#define LOCKSTEP_DECLARE_TYPE_OPS(T) \
+  template <>                        \
+  const TypeOps& TypeOpsOf<msg::T>();
+LOCKSTEP_MESSAGE_TYPES(LOCKSTEP_DECLARE_TYPE_OPS)
+#undef LOCKSTEP_DECLARE_TYPE_OPS
+
+namespace topics {
+// Clock and membership.
+inline constexpr Topic<msg::Tick> kTick{"lockstep/tick", QosKind::kClock};
+inline constexpr Topic<msg::Ack> kAck{"lockstep/ack", QosKind::kAck};
+inline constexpr Topic<msg::ServiceAnnounce> kService{"lockstep/service", QosKind::kMembership};
+inline constexpr Topic<msg::ServiceSnapshot> kSnapshot{"lockstep/snapshot", QosKind::kMembership};
+inline constexpr Topic<msg::RunStatus> kRunStatus{"lockstep/run_status", QosKind::kClock};
+inline constexpr Topic<msg::FrameDone> kFrameDone{"lockstep/frame_done", QosKind::kClock};
+inline constexpr Topic<msg::WorldInfo> kWorldInfo{"lockstep/world_info", QosKind::kClock};
+inline constexpr Topic<msg::MapData> kMap{"lockstep/map", QosKind::kClock};
+// Clients.
+inline constexpr Topic<msg::Command> kCommand{"lockstep/command", QosKind::kCommand};
+inline constexpr Topic<msg::CommandReply> kCommandReply{"lockstep/command_reply", QosKind::kCommand};
+// World state.
+inline constexpr Topic<msg::GroundState> kGroundState{"lockstep/ground_state", QosKind::kState};
+inline constexpr Topic<msg::AirState> kAirState{"lockstep/air_state", QosKind::kState};
+inline constexpr Topic<msg::SimEvent> kEvent{"lockstep/event", QosKind::kEvent};
+// Sensors.
+inline constexpr Topic<msg::Image> kImage{"lockstep/sensor/image", QosKind::kSensor};
+inline constexpr Topic<msg::PointCloud> kPointCloud{"lockstep/sensor/point_cloud", QosKind::kSensor};
+inline constexpr Topic<msg::RadarScan> kRadar{"lockstep/sensor/radar", QosKind::kSensor};
+inline constexpr Topic<msg::Imu> kImu{"lockstep/sensor/imu", QosKind::kSensor};
+inline constexpr Topic<msg::Gnss> kGnss{"lockstep/sensor/gnss", QosKind::kSensor};
+inline constexpr Topic<msg::Barometer> kBarometer{"lockstep/sensor/barometer", QosKind::kSensor};
+inline constexpr Topic<msg::Magnetometer> kMagnetometer{"lockstep/sensor/magnetometer", QosKind::kSensor};
+inline constexpr Topic<msg::CollisionEvent> kCollision{"lockstep/sensor/collision", QosKind::kEvent};
+inline constexpr Topic<msg::LaneInvasionEvent> kLaneInvasion{"lockstep/sensor/lane_invasion", QosKind::kEvent};
+inline constexpr Topic<msg::ObstacleDetection> kObstacle{"lockstep/sensor/obstacle", QosKind::kSensor};
+}  // namespace topics
+
+}  // namespace lockstep

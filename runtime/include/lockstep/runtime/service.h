@@ -1,0 +1,57 @@
+#pragma once
+// The service loop every Lockstep service runs: receive Tick k, apply its commands,
+// step, publish outputs stamped k, then Ack k. The step itself lives in a ServiceCore,
+// which never sees DDS.
+#include <atomic>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "lockstep/runtime/bus.h"
+#include "lockstep/runtime/messages.h"
+
+namespace lockstep {
+
+struct ServiceOptions {
+  std::string name;                  // unique in a run, e.g. "air_sim"
+  std::string kind;                  // implementation, e.g. "air_sim"
+  bool perception = false;           // render / sensors: read-only phase
+  double liveliness_period_s = 0.1;  // s, how often the ack writer asserts liveliness
+  double world_info_timeout_s = 30;  // s, how long to wait for the coordinator at start
+};
+
+// Implemented by each service; called on the runner's thread only.
+class ServiceCore {
+ public:
+  virtual ~ServiceCore() = default;
+  // A run begins (first join, reset or new map). Seed and settings are in `world`.
+  virtual void BeginRun(const msg::WorldInfo& world) = 0;
+  // Apply tick.commands() in order, advance the state to tick.frame(), publish outputs
+  // stamped with it.
+  virtual void Step(const msg::Tick& tick) = 0;
+  // FNV-1a of the state after the last step (0: the service keeps no state).
+  virtual uint64_t StateHash() const { return 0; }
+  // Full state for a replacement process. Empty: the service cannot be restored and a
+  // replacement starts from BeginRun at the current frame.
+  virtual std::vector<uint8_t> SaveState() const { return {}; }
+  virtual void RestoreState(const std::vector<uint8_t>& /*state*/) {}
+};
+
+class ServiceRunner {
+ public:
+  ServiceRunner(Bus& bus, ServiceOptions options, ServiceCore& core);
+  ~ServiceRunner();
+  ServiceRunner(const ServiceRunner&) = delete;
+  ServiceRunner& operator=(const ServiceRunner&) = delete;
+
+  // Runs until `stop` becomes true. Throws InputError if the coordinator never shows up.
+  void Run(const std::atomic<bool>& stop);
+  uint64_t last_frame() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace lockstep

@@ -1,0 +1,32 @@
+// Type operations for every message: the only place that sees the generated
+// PubSubTypes (and through them Fast DDS headers).
+#include "lockstep/runtime/messages.h"
+
+#include "lockstep/msg/clockPubSubTypes.h"
+#include "lockstep/msg/commandPubSubTypes.h"
+#include "lockstep/msg/mapPubSubTypes.h"
+#include "lockstep/msg/sensorPubSubTypes.h"
+#include "lockstep/msg/statePubSubTypes.h"
+#include "lockstep/msg/worldPubSubTypes.h"
+
+namespace lockstep {
+
+#define LOCKSTEP_DEFINE_TYPE_OPS(T)                                                           \
+  template <>                                                                                 \
+  const TypeOps& TypeOpsOf<msg::T>() {                                                        \
+    static const TypeOps ops{                                                                 \
+        "lockstep::msg::" #T,                                                                 \
+        []() -> void* {                                                                       \
+          return static_cast<eprosima::fastdds::dds::TopicDataType*>(new msg::T##PubSubType()); \
+        },                                                                                    \
+        []() -> void* { return new msg::T(); },                                               \
+        [](void* p) { delete static_cast<msg::T*>(p); },                                      \
+        [](void* dst, const void* src) {                                                      \
+          *static_cast<msg::T*>(dst) = *static_cast<const msg::T*>(src);                      \
+        }};                                                                                   \
+    return ops;                                                                               \
+  }
+LOCKSTEP_MESSAGE_TYPES(LOCKSTEP_DEFINE_TYPE_OPS)
+#undef LOCKSTEP_DEFINE_TYPE_OPS
+
+}  // namespace lockstep

@@ -1,0 +1,38 @@
+#include "lockstep/runtime/bus.h"
+
+namespace lockstep {
+
+const char* QosFamilyName(QosKind kind) {
+  switch (kind) {
+    case QosKind::kClock: return "clock";
+    case QosKind::kAck: return "ack";
+    case QosKind::kMembership: return "membership";
+    case QosKind::kCommand: return "command";
+    case QosKind::kState: return "state";
+    case QosKind::kEvent: return "event";
+    case QosKind::kSensor: return "sensor";
+  }
+  return "unknown";
+}
+
+// Mirrors deploy/qos/fastdds.xml for the in-process bus.
+int QosHistoryDepth(QosKind kind) {
+  switch (kind) {
+    case QosKind::kClock:
+    case QosKind::kAck:
+    case QosKind::kMembership: return 1;
+    case QosKind::kCommand: return 256;
+    case QosKind::kState: return 4;
+    case QosKind::kEvent: return 64;
+    case QosKind::kSensor: return 2;
+  }
+  return 1;
+}
+
+bool QosTransientLocal(QosKind kind) {
+  return kind == QosKind::kClock || kind == QosKind::kMembership || kind == QosKind::kState;
+}
+
+std::string DefaultQosFile() { return LOCKSTEP_DEFAULT_QOS_FILE; }
+
+}  // namespace lockstep

@@ -1,0 +1,235 @@
+#include "lockstep/runtime/service.h"
+
+#include <unistd.h>
+
+#include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <mutex>
+#include <optional>
+#include <thread>
+
+#include "lockstep/runtime/error.h"
+#include "lockstep/runtime/log.h"
+
+namespace lockstep {
+
+using Clock = std::chrono::steady_clock;
+
+struct ServiceRunner::Impl {
+  Impl(Bus& b, ServiceOptions o, ServiceCore& c) : bus(b), options(std::move(o)), core(c) {}
+
+  Bus& bus;
+  ServiceOptions options;
+  ServiceCore& core;
+
+  std::mutex mu;
+  std::condition_variable cv;
+  std::deque<msg::Tick> ticks;
+  std::optional<msg::WorldInfo> world;
+  std::optional<msg::ServiceSnapshot> snapshot;  // our own last snapshot, for a replacement
+
+  uint32_t run = 0;
+  std::atomic<uint64_t> last_frame{0};
+  uint64_t last_hash = 0;
+  bool can_snapshot = true;
+
+  Writer<msg::Ack> ack;
+  Writer<msg::ServiceAnnounce> announce;
+  Writer<msg::ServiceSnapshot> snapshot_writer;
+  Reader<msg::Tick> tick_reader;
+  Reader<msg::WorldInfo> world_reader;
+  Reader<msg::ServiceSnapshot> snapshot_reader;
+
+  void Announce(msg::ServiceState state) {
+    msg::ServiceAnnounce a;
+    a.service(options.name);
+    a.kind(options.kind);
+    a.perception(options.perception);
+    a.state(state);
+    a.pid(static_cast<int32_t>(getpid()));
+    char host[64] = {};
+    gethostname(host, sizeof host - 1);
+    a.host(host);
+    a.last_frame(last_frame);
+    announce.Write(a);
+  }
+
+  void SendAck(uint64_t frame, double wall_us) {
+    msg::Ack a;
+    a.service(options.name);
+    a.run(run);
+    a.frame(frame);
+    a.state_hash(last_hash);
+    a.step_wall_us(wall_us);
+    ack.Write(a);
+  }
+
+  void PublishSnapshot() {
+    if (!can_snapshot) return;
+    std::vector<uint8_t> state = core.SaveState();
+    if (state.empty()) {
+      can_snapshot = false;  // stateless or not restorable: stop trying
+      return;
+    }
+    msg::ServiceSnapshot s;
+    s.service(options.name);
+    s.run(run);
+    s.frame(last_frame);
+    s.state_hash(last_hash);
+    s.state(std::move(state));
+    snapshot_writer.Write(s);
+  }
+
+  // Waits for world info of `wanted_run` (0 = any).
+  msg::WorldInfo WaitWorld(uint32_t wanted_run, const std::atomic<bool>& stop) {
+    std::unique_lock<std::mutex> lock(mu);
+    const Clock::time_point deadline =
+        Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.world_info_timeout_s));
+    while (!stop) {
+      if (world && (wanted_run == 0 || world->run() == wanted_run)) return *world;
+      if (cv.wait_until(lock, std::min<Clock::time_point>(deadline, Clock::now() + std::chrono::milliseconds(100))) ==
+              std::cv_status::timeout &&
+          Clock::now() >= deadline) {
+        throw InputError("service '" + options.name + "': no world info from a coordinator within " +
+                         std::to_string(options.world_info_timeout_s) + " s (is it running on this DDS domain?)");
+      }
+    }
+    throw InputError("stopped");
+  }
+
+  // Join: restore from our last snapshot when the run is already under way.
+  void Join(const std::atomic<bool>& stop) {
+    msg::WorldInfo w = WaitWorld(0, stop);
+    run = w.run();
+    core.BeginRun(w);
+    std::optional<msg::Tick> current;
+    std::optional<msg::ServiceSnapshot> snap;
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      if (!ticks.empty() && ticks.back().run() == run) current = ticks.back();
+      if (snapshot && snapshot->run() == run) snap = snapshot;
+    }
+    if (current) {
+      // The run is under way: take over at the snapshot, or join stateless just before
+      // the current tick.
+      if (snap && snap->frame() < current->frame()) {
+        core.RestoreState(snap->state());
+        last_frame = snap->frame();
+        last_hash = core.StateHash();
+        spdlog::info("restored state of frame {} (hash {:016x})", last_frame.load(), last_hash);
+      } else {
+        last_frame = current->frame() - 1;
+        spdlog::info("joining run {} at frame {}", run, last_frame.load());
+      }
+    }
+    // An ack before any tick tells the coordinator which writer is ours (liveliness).
+    SendAck(last_frame, 0);
+    Announce(msg::ServiceState::SERVICE_READY);
+  }
+
+  void Handle(const msg::Tick& tick, const std::atomic<bool>& stop) {
+    if (tick.run() != run) {
+      msg::WorldInfo w = WaitWorld(tick.run(), stop);
+      run = w.run();
+      core.BeginRun(w);
+      last_frame = 0;
+      last_hash = 0;
+      can_snapshot = true;
+    }
+    if (tick.frame() <= last_frame) {
+      SendAck(tick.frame(), 0);  // a re-sent tick we already did: ack again, idempotent
+      return;
+    }
+    if (tick.frame() != last_frame + 1) {
+      spdlog::warn("tick {} arrived after frame {}: {} frame(s) missed; stepping on from here",
+                   tick.frame(), last_frame.load(), tick.frame() - last_frame - 1);
+    }
+    const auto t0 = Clock::now();
+    core.Step(tick);
+    last_frame = tick.frame();
+    last_hash = core.StateHash();
+    PublishSnapshot();
+    const double us = std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
+    SendAck(tick.frame(), us);
+  }
+};
+
+ServiceRunner::ServiceRunner(Bus& bus, ServiceOptions options, ServiceCore& core)
+    : impl_(std::make_unique<Impl>(bus, std::move(options), core)) {
+  auto& s = *impl_;
+  if (s.options.name.empty()) throw InputError("a service needs a name");
+  s.ack = Writer<msg::Ack>(bus, topics::kAck);
+  s.announce = Writer<msg::ServiceAnnounce>(bus, topics::kService);
+  s.snapshot_writer = Writer<msg::ServiceSnapshot>(bus, topics::kSnapshot);
+  s.snapshot_reader = Reader<msg::ServiceSnapshot>(bus, topics::kSnapshot, [&s](const msg::ServiceSnapshot& snap, const SampleInfo& info) {
+    if (snap.service() != s.options.name || info.writer_id == s.snapshot_writer.id()) return;
+    std::lock_guard<std::mutex> lock(s.mu);
+    s.snapshot = snap;
+  });
+  s.world_reader = Reader<msg::WorldInfo>(bus, topics::kWorldInfo, [&s](const msg::WorldInfo& w, const SampleInfo&) {
+    {
+      std::lock_guard<std::mutex> lock(s.mu);
+      s.world = w;
+    }
+    s.cv.notify_all();
+  });
+  s.tick_reader = Reader<msg::Tick>(bus, topics::kTick, [&s](const msg::Tick& t, const SampleInfo&) {
+    {
+      std::lock_guard<std::mutex> lock(s.mu);
+      s.ticks.push_back(t);
+    }
+    s.cv.notify_one();
+  });
+  s.Announce(msg::ServiceState::SERVICE_STARTING);
+}
+
+ServiceRunner::~ServiceRunner() {
+  try {
+    impl_->Announce(msg::ServiceState::SERVICE_STOPPING);
+  } catch (...) {
+  }
+}
+
+uint64_t ServiceRunner::last_frame() const { return impl_->last_frame; }
+
+void ServiceRunner::Run(const std::atomic<bool>& stop) {
+  auto& s = *impl_;
+  // Liveliness comes from its own thread, so a long step is not mistaken for a hang
+  // (the coordinator's per-tick timeout covers that); a stopped or killed process
+  // stops asserting and is noticed within the 500 ms lease.
+  std::atomic<bool> heartbeat_stop{false};
+  std::thread heartbeat([&] {
+    std::unique_lock<std::mutex> lock(s.mu);
+    while (!heartbeat_stop && !stop) {
+      lock.unlock();
+      s.ack.AssertLiveliness();
+      lock.lock();
+      s.cv.wait_for(lock, std::chrono::duration<double>(s.options.liveliness_period_s));
+    }
+  });
+  try {
+    s.Join(stop);
+    while (!stop) {
+      std::optional<msg::Tick> tick;
+      {
+        std::unique_lock<std::mutex> lock(s.mu);
+        s.cv.wait_for(lock, std::chrono::milliseconds(100), [&] { return !s.ticks.empty() || stop; });
+        if (s.ticks.empty()) continue;
+        tick = std::move(s.ticks.front());
+        s.ticks.pop_front();
+      }
+      s.Handle(*tick, stop);
+    }
+  } catch (...) {
+    heartbeat_stop = true;
+    s.cv.notify_all();
+    heartbeat.join();
+    throw;
+  }
+  heartbeat_stop = true;
+  s.cv.notify_all();
+  heartbeat.join();
+}
+
+}  // namespace lockstep

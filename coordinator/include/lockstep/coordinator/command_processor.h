@@ -1,0 +1,55 @@
+#pragma once
+// Validates client commands and sequences the accepted ones into ticks. Owns actor ids.
+// Plain logic: the coordinator process feeds it commands and takes the batches.
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "lockstep/coordinator/blueprints.h"
+#include "lockstep/msg/command.h"
+
+namespace lockstep {
+
+struct ActorRecord {
+  uint32_t id = 0;
+  std::string blueprint;
+  ActorKind kind = ActorKind::kVehicle;
+  uint32_t parent = 0;
+};
+
+class CommandProcessor {
+ public:
+  explicit CommandProcessor(BlueprintLibrary library);
+
+  // Checks `cmd`. Accepted commands join the pending batch (spawns with their new
+  // actor id filled in). `synchronous` tells whether tick requests are allowed.
+  // The reply carries the reason of a rejection.
+  msg::CommandReply Submit(const msg::Command& cmd, uint32_t run, uint64_t next_frame, bool synchronous);
+
+  // The accepted commands for the next tick, in acceptance order.
+  std::vector<msg::Command> TakePending();
+  bool HasPending() const { return !pending_.empty(); }
+
+  // A new run: actors are gone, ids start again at 1.
+  void ResetActors();
+  // Actors the map brings (traffic lights), so commands can address them.
+  uint32_t AddMapActor(const std::string& blueprint, ActorKind kind);
+
+  const std::map<uint32_t, ActorRecord>& actors() const { return actors_; }
+  const BlueprintLibrary& library() const { return library_; }
+
+  // Empty if valid, else the reason. Exposed for tests and the client libraries.
+  std::string Check(const msg::Command& cmd, bool synchronous) const;
+
+ private:
+  std::string CheckActor(uint32_t id, ActorKind kind) const;
+  std::string CheckDrone(const msg::DroneCommand& d) const;
+
+  BlueprintLibrary library_;
+  std::map<uint32_t, ActorRecord> actors_;
+  uint32_t next_actor_ = 1;
+  std::vector<msg::Command> pending_;
+};
+
+}  // namespace lockstep

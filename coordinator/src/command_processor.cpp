@@ -1,0 +1,272 @@
+#include "lockstep/coordinator/command_processor.h"
+
+#include <cmath>
+#include <sstream>
+
+#include "lockstep/runtime/launch_config.h"
+
+namespace lockstep {
+namespace {
+
+using msg::CommandKind;
+
+bool Finite(const msg::Vector3& v) { return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z()); }
+
+std::string CheckPose(const msg::Pose& p, const char* what) {
+  const auto& q = p.orientation();
+  if (!Finite(p.position()) || !std::isfinite(q.w()) || !std::isfinite(q.x()) || !std::isfinite(q.y()) || !std::isfinite(q.z())) {
+    return std::string(what) + " has a NaN or infinite value";
+  }
+  const double n = std::sqrt(q.w() * q.w() + q.x() * q.x() + q.y() * q.y() + q.z() * q.z());
+  if (std::abs(n - 1.0) > 1e-3) {
+    std::ostringstream r;
+    r << what << " orientation is not a unit quaternion (norm " << n << ")";
+    return r.str();
+  }
+  return {};
+}
+
+std::string InRange(const char* name, double v, double lo, double hi) {
+  if (!std::isfinite(v)) return std::string(name) + " is NaN or infinite";
+  if (v < lo || v > hi) {
+    std::ostringstream r;
+    r << name << " = " << v << " is outside [" << lo << ", " << hi << "]";
+    return r.str();
+  }
+  return {};
+}
+
+// First non-empty reason of a list.
+template <class... S>
+std::string First(S&&... reasons) {
+  std::string out;
+  ((out.empty() ? (void)(out = reasons) : (void)0), ...);
+  return out;
+}
+
+}  // namespace
+
+CommandProcessor::CommandProcessor(BlueprintLibrary library) : library_(std::move(library)) {}
+
+void CommandProcessor::ResetActors() {
+  actors_.clear();
+  next_actor_ = 1;
+  pending_.clear();
+}
+
+uint32_t CommandProcessor::AddMapActor(const std::string& blueprint, ActorKind kind) {
+  const uint32_t id = next_actor_++;
+  actors_[id] = ActorRecord{id, blueprint, kind, 0};
+  return id;
+}
+
+std::string CommandProcessor::CheckActor(uint32_t id, ActorKind kind) const {
+  auto it = actors_.find(id);
+  if (it == actors_.end()) return "unknown actor " + std::to_string(id);
+  if (it->second.kind != kind) {
+    return "actor " + std::to_string(id) + " is a " + ActorKindName(it->second.kind) + " (" + it->second.blueprint +
+           "), not a " + ActorKindName(kind);
+  }
+  return {};
+}
+
+std::string CommandProcessor::CheckDrone(const msg::DroneCommand& d) const {
+  using K = msg::DroneCommandKind;
+  if (auto r = CheckActor(d.actor(), ActorKind::kDrone); !r.empty()) return r;
+  if (!Finite(d.target())) return "drone target has a NaN or infinite value";
+  for (const auto& p : d.path()) {
+    if (!Finite(p)) return "drone path has a NaN or infinite point";
+  }
+  for (double v : d.values()) {
+    if (!std::isfinite(v)) return "drone values have a NaN or infinite entry";
+  }
+  if (auto r = First(InRange("velocity", d.velocity(), 0, 100), InRange("duration", d.duration(), 0, 1e6),
+                     InRange("timeout", d.timeout(), -1e9, 1e6), InRange("lookahead", d.lookahead(), -1e9, 1e3),
+                     InRange("margin", d.margin(), -1e9, 1e3), InRange("yaw", d.yaw().value(), -1e3, 1e3));
+      !r.empty()) {
+    return r;
+  }
+  auto need_values = [&](size_t n, const char* what) -> std::string {
+    if (d.values().size() != n) {
+      return std::string(what) + " needs " + std::to_string(n) + " values, got " + std::to_string(d.values().size());
+    }
+    return {};
+  };
+  switch (d.kind()) {
+    case K::DRONE_MOVE_TO_POSITION:
+    case K::DRONE_GO_HOME:
+      if (d.velocity() <= 0) return "velocity must be > 0 m/s";
+      return {};
+    case K::DRONE_MOVE_ON_PATH:
+      if (d.path().empty()) return "move on path needs at least one point";
+      if (d.velocity() <= 0) return "velocity must be > 0 m/s";
+      return {};
+    case K::DRONE_MOVE_BY_VELOCITY:
+    case K::DRONE_MOVE_BY_VELOCITY_Z:
+      return InRange("speed", std::hypot(d.target().x(), d.target().y()), 0, 100);
+    case K::DRONE_MOVE_BY_ROLL_PITCH_YAW_THROTTLE:
+    case K::DRONE_MOVE_BY_ANGLE_RATES_THROTTLE:
+      if (auto r = need_values(4, "this command"); !r.empty()) return r;
+      return InRange("throttle", d.values()[3], 0, 1);
+    case K::DRONE_MOVE_BY_ROLL_PITCH_YAW_Z:
+      return need_values(4, "roll/pitch/yaw/z");
+    case K::DRONE_MOVE_BY_MOTOR_PWMS:
+      if (d.values().empty() || d.values().size() > 8) return "motor PWMs need 1..8 values";
+      for (double v : d.values()) {
+        if (auto r = InRange("pwm", v, 0, 1); !r.empty()) return r;
+      }
+      return {};
+    case K::DRONE_SET_GAINS:
+      if (!Finite(d.gains().kp()) || !Finite(d.gains().ki()) || !Finite(d.gains().kd())) return "gains have a NaN";
+      if (d.gains().kp().x() < 0 || d.gains().kp().y() < 0 || d.gains().kp().z() < 0) return "gains must be >= 0";
+      return {};
+    default:
+      return {};
+  }
+}
+
+std::string CommandProcessor::Check(const msg::Command& cmd, bool synchronous) const {
+  const auto& b = cmd.body();
+  switch (b._d()) {
+    case CommandKind::CMD_SPAWN_ACTOR: {
+      const auto& s = b.spawn_actor();
+      const Blueprint* bp = library_.Find(s.blueprint().to_string());
+      if (!bp) return "unknown blueprint '" + s.blueprint().to_string() + "'";
+      if (auto r = library_.Check(*bp, s.attributes()); !r.empty()) return r;
+      if (auto r = CheckPose(s.transform(), "spawn transform"); !r.empty()) return r;
+      if (s.parent() != 0 && !actors_.count(s.parent())) return "unknown parent actor " + std::to_string(s.parent());
+      return {};
+    }
+    case CommandKind::CMD_DESTROY_ACTOR:
+      if (!actors_.count(b.destroy_actor().actor())) return "unknown actor " + std::to_string(b.destroy_actor().actor());
+      return {};
+    case CommandKind::CMD_SET_TRANSFORM:
+      if (!actors_.count(b.set_transform().actor())) return "unknown actor " + std::to_string(b.set_transform().actor());
+      return CheckPose(b.set_transform().transform(), "transform");
+    case CommandKind::CMD_VEHICLE_CONTROL: {
+      const auto& c = b.vehicle_control();
+      return First(CheckActor(c.actor(), ActorKind::kVehicle), InRange("throttle", c.throttle(), 0, 1),
+                   InRange("steer", c.steer(), -1, 1), InRange("brake", c.brake(), 0, 1), InRange("gear", c.gear(), -1, 10));
+    }
+    case CommandKind::CMD_WALKER_CONTROL: {
+      const auto& c = b.walker_control();
+      if (!Finite(c.direction())) return "walker direction has a NaN or infinite value";
+      return First(CheckActor(c.actor(), ActorKind::kWalker), InRange("speed", c.speed(), 0, 10));
+    }
+    case CommandKind::CMD_DRONE:
+      return CheckDrone(b.drone());
+    case CommandKind::CMD_TRAFFIC_LIGHT: {
+      const auto& t = b.traffic_light();
+      return First(CheckActor(t.actor(), ActorKind::kTrafficLight), InRange("green_time", t.green_time(), -1, 3600),
+                   InRange("yellow_time", t.yellow_time(), -1, 3600), InRange("red_time", t.red_time(), -1, 3600));
+    }
+    case CommandKind::CMD_TRAFFIC_MANAGER: {
+      using P = msg::TrafficManagerParameter;
+      const auto& t = b.traffic_manager();
+      if (t.actor() != 0) {
+        if (auto r = CheckActor(t.actor(), ActorKind::kVehicle); !r.empty()) return r;
+      }
+      switch (t.parameter()) {
+        case P::TM_AUTOPILOT:
+          if (t.actor() == 0) return "autopilot needs a vehicle actor";
+          return InRange("autopilot", t.value(), 0, 1);
+        case P::TM_DISTANCE_TO_LEADING_VEHICLE: return InRange("distance", t.value(), 0, 100);
+        case P::TM_PERCENTAGE_SPEED_DIFFERENCE: return InRange("percentage", t.value(), -500, 100);
+        case P::TM_IGNORE_LIGHTS_PERCENTAGE:
+        case P::TM_IGNORE_SIGNS_PERCENTAGE:
+        case P::TM_IGNORE_VEHICLES_PERCENTAGE:
+        case P::TM_IGNORE_WALKERS_PERCENTAGE: return InRange("percentage", t.value(), 0, 100);
+        case P::TM_AUTO_LANE_CHANGE: return InRange("auto_lane_change", t.value(), 0, 1);
+        case P::TM_HYBRID_PHYSICS_RADIUS: return InRange("radius", t.value(), 0, 10000);
+        case P::TM_RANDOM_SEED: return InRange("seed", t.value(), 0, 4294967295.0);
+      }
+      return "unknown traffic manager parameter";
+    }
+    case CommandKind::CMD_SET_WEATHER: {
+      const auto& w = b.weather();
+      return First(InRange("cloudiness", w.cloudiness(), -1, 100), InRange("precipitation", w.precipitation(), -1, 100),
+                   InRange("precipitation_deposits", w.precipitation_deposits(), -1, 100),
+                   InRange("wind_intensity", w.wind_intensity(), -1, 100), InRange("sun_azimuth_angle", w.sun_azimuth_angle(), -1, 360),
+                   InRange("sun_altitude_angle", w.sun_altitude_angle(), -90, 90), InRange("fog_density", w.fog_density(), -1, 100),
+                   InRange("fog_distance", w.fog_distance(), -1, 1e5), InRange("fog_falloff", w.fog_falloff(), -1, 1e3),
+                   InRange("wetness", w.wetness(), -1, 100), InRange("scattering_intensity", w.scattering_intensity(), 0, 1e3),
+                   InRange("mie_scattering_scale", w.mie_scattering_scale(), 0, 1e3),
+                   InRange("rayleigh_scattering_scale", w.rayleigh_scattering_scale(), 0, 1e3),
+                   InRange("dust_storm", w.dust_storm(), 0, 100));
+    }
+    case CommandKind::CMD_SET_WORLD_SETTINGS:
+      try {
+        ValidateWorldSettings(b.world_settings(), "world settings");
+      } catch (const std::exception& e) {
+        return e.what();
+      }
+      return {};
+    case CommandKind::CMD_LOAD_MAP: {
+      const auto& m = b.load_map();
+      if (m.name().to_string().empty() && m.opendrive().empty()) return "load_map needs a map name or OpenDRIVE text";
+      if (!m.opendrive().empty() && m.opendrive().find("<OpenDRIVE") == std::string::npos) {
+        return "load_map: the inline text is not OpenDRIVE (no <OpenDRIVE> element)";
+      }
+      return {};
+    }
+    case CommandKind::CMD_RESET:
+      return {};
+    case CommandKind::CMD_TICK:
+      if (!synchronous) return "tick requests need synchronous_mode; the world is free-running";
+      return InRange("tick count", b.tick_request().count(), 1, 1e6);
+  }
+  return "unknown command kind";
+}
+
+msg::CommandReply CommandProcessor::Submit(const msg::Command& cmd, uint32_t run, uint64_t next_frame, bool synchronous) {
+  msg::CommandReply reply;
+  reply.client(cmd.client());
+  reply.sequence_number(cmd.sequence_number());
+  reply.run(run);
+  reply.frame(next_frame);
+  std::string reason = Check(cmd, synchronous);
+  if (!reason.empty()) {
+    reply.accepted(false);
+    reply.reason(reason.substr(0, 511));
+    return reply;
+  }
+  reply.accepted(true);
+  msg::Command accepted = cmd;
+  auto& b = accepted.body();
+  switch (b._d()) {
+    case CommandKind::CMD_SPAWN_ACTOR: {
+      const uint32_t id = next_actor_++;
+      b.spawn_actor().actor(id);
+      actors_[id] = ActorRecord{id, b.spawn_actor().blueprint().to_string(), library_.Find(b.spawn_actor().blueprint().to_string())->kind,
+                                b.spawn_actor().parent()};
+      reply.actor(id);
+      break;
+    }
+    case CommandKind::CMD_DESTROY_ACTOR: {
+      // Children go with their parent, as attached sensors do.
+      std::vector<uint32_t> doomed{b.destroy_actor().actor()};
+      for (size_t i = 0; i < doomed.size(); ++i) {
+        for (const auto& [id, rec] : actors_) {
+          if (rec.parent == doomed[i]) doomed.push_back(id);
+        }
+      }
+      for (uint32_t id : doomed) actors_.erase(id);
+      break;
+    }
+    case CommandKind::CMD_TICK:
+      reply.frame(next_frame + b.tick_request().count() - 1);
+      return reply;  // the coordinator counts it; services never see tick requests
+    default:
+      break;
+  }
+  pending_.push_back(std::move(accepted));
+  return reply;
+}
+
+std::vector<msg::Command> CommandProcessor::TakePending() {
+  std::vector<msg::Command> out;
+  out.swap(pending_);
+  return out;
+}
+
+}  // namespace lockstep

@@ -1,0 +1,537 @@
+#include "lockstep/coordinator/coordinator.h"
+
+#include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <sstream>
+
+#include "lockstep/coordinator/command_processor.h"
+#include "lockstep/coordinator/tick_barrier.h"
+#include "lockstep/runtime/error.h"
+#include "lockstep/runtime/hash.h"
+#include "lockstep/runtime/log.h"
+#include "lockstep/runtime/messages.h"
+
+namespace lockstep {
+
+using Clock = std::chrono::steady_clock;
+using msg::RunState;
+
+namespace {
+
+struct Member {
+  std::string kind;
+  bool required = false;
+  bool ready = false;         // announced READY since it (re)joined
+  bool alive = false;         // ready and its ack writer's liveliness holds
+  int32_t pid = 0;
+  uint64_t ack_writer = 0;    // writer id of its Ack DataWriter
+  uint64_t last_frame = 0;
+  double last_step_us = 0;
+  std::string failure;        // why it is not alive, if it failed
+};
+
+std::string ReadFile(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw lockstep::InputError("cannot read map file '" + path + "'");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+msg::WeatherParameters DefaultWeather() {
+  // CARLA's ClearNoon.
+  msg::WeatherParameters w;
+  w.cloudiness(5);
+  w.precipitation(0);
+  w.precipitation_deposits(0);
+  w.wind_intensity(10);
+  w.sun_azimuth_angle(-1);
+  w.sun_altitude_angle(45);
+  w.fog_density(2);
+  w.fog_distance(0.75f);
+  w.fog_falloff(0.1f);
+  w.wetness(0);
+  w.scattering_intensity(1);
+  w.mie_scattering_scale(0.03f);
+  w.rayleigh_scattering_scale(0.0331f);
+  w.dust_storm(0);
+  return w;
+}
+
+const char* RunStateName(RunState s) {
+  switch (s) {
+    case RunState::RUN_WAITING_FOR_SERVICES: return "waiting for services";
+    case RunState::RUN_READY: return "ready";
+    case RunState::RUN_RUNNING: return "running";
+    case RunState::RUN_FAULTED: return "faulted";
+    case RunState::RUN_STOPPED: return "stopped";
+  }
+  return "?";
+}
+
+}  // namespace
+
+struct Coordinator::Impl {
+  Impl(Bus& b, LaunchConfig c) : bus(b), config(std::move(c)), commands(BlueprintLibrary::Default()) {}
+
+  Bus& bus;
+  LaunchConfig config;
+  CommandProcessor commands;
+  TickBarrier barrier;
+
+  mutable std::mutex mu;
+  std::condition_variable cv;
+  std::map<std::string, Member> members;
+  std::deque<msg::Command> inbox;
+
+  // Run state, touched by the main loop only (under mu).
+  RunState state = RunState::RUN_WAITING_FOR_SERVICES;
+  uint32_t run = 1;
+  uint64_t frame = 0;          // last completed frame
+  double sim_time = 0;         // s, of the last completed frame
+  uint64_t seed = 0;
+  msg::WorldSettings settings;
+  msg::WeatherParameters weather;
+  msg::Tick open_tick;         // the tick in flight (barrier open)
+  Clock::time_point tick_sent;
+  Clock::time_point tick_deadline;
+  Clock::time_point next_tick_at;  // pacing for real_time_factor > 0
+  uint64_t ticks_requested = 0;    // synchronous mode: ticks asked for and not yet started
+  std::string map_name;
+  std::string map_opendrive;
+  std::string map_scene;
+  std::string failed_service;
+  std::string failure_reason;
+
+  // Statistics.
+  std::deque<Clock::time_point> recent_done;
+  double barrier_us_sum = 0;
+  uint64_t barrier_count = 0;
+  Clock::time_point last_status;
+  bool status_dirty = true;
+
+  Writer<msg::Tick> tick_writer;
+  Writer<msg::WorldInfo> world_writer;
+  Writer<msg::MapData> map_writer;
+  Writer<msg::RunStatus> status_writer;
+  Writer<msg::FrameDone> done_writer;
+  Writer<msg::CommandReply> reply_writer;
+  Reader<msg::Ack> ack_reader;
+  Reader<msg::ServiceAnnounce> service_reader;
+  Reader<msg::Command> command_reader;
+
+  // --- callbacks (middleware threads) ---
+  void OnAck(const msg::Ack& a, const SampleInfo& info) {
+    bool wake = false;
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      const std::string name = a.service().to_string();
+      auto it = members.try_emplace(name).first;
+      Member& m = it->second;
+      m.ack_writer = info.writer_id;
+      if (a.run() == run) {
+        m.last_frame = a.frame();
+        m.last_step_us = a.step_wall_us();
+      }
+      wake = barrier.OnAck(name, a.run(), a.frame(), a.state_hash()) == TickBarrier::AckResult::kCounted &&
+             barrier.Complete();
+    }
+    if (wake) cv.notify_one();
+  }
+
+  void OnLiveliness(const LivelinessChange& change) {
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      for (auto& [name, m] : members) {
+        if (m.ack_writer != change.writer_id || change.writer_id == 0) continue;
+        if (!change.alive && m.alive) {
+          m.alive = false;
+          m.failure = "lost liveliness: no heartbeat for 500 ms (process crashed, hung or stopped)";
+          spdlog::error("service '{}' (pid {}) {}", name, m.pid, m.failure);
+        } else if (change.alive && m.ready && !m.alive) {
+          m.alive = true;
+          m.failure.clear();
+          spdlog::info("service '{}' is alive again", name);
+        }
+        status_dirty = true;
+      }
+    }
+    cv.notify_one();
+  }
+
+  void OnAnnounce(const msg::ServiceAnnounce& a) {
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      Member& m = members[a.service().to_string()];
+      m.kind = a.kind().to_string();
+      if (a.state() == msg::ServiceState::SERVICE_READY) {
+        if (!m.alive) spdlog::info("service '{}' ({}, pid {} on {}) joined at frame {}", a.service().to_string(),
+                                   a.kind().to_string(), a.pid(), a.host().to_string(), a.last_frame());
+        m.ready = true;
+        m.alive = true;
+        m.failure.clear();
+      } else if (a.state() == msg::ServiceState::SERVICE_STOPPING) {
+        if (m.alive) {
+          m.failure = "stopped (announced shutdown)";
+          spdlog::warn("service '{}' {}", a.service().to_string(), m.failure);
+        }
+        m.ready = false;
+        m.alive = false;
+      } else {
+        m.ready = false;
+        m.alive = false;
+      }
+      m.pid = a.pid();
+      status_dirty = true;
+    }
+    cv.notify_one();
+  }
+
+  void OnCommand(const msg::Command& c) {
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      inbox.push_back(c);
+    }
+    cv.notify_one();
+  }
+
+  // --- main loop helpers (called with mu held) ---
+  void PublishWorld() {
+    msg::WorldInfo w;
+    w.run(run);
+    w.map_name(map_name);
+    w.map_hash(Fnv1a64().Add(std::string_view(map_opendrive)).Add(std::string_view(map_scene)).value());
+    w.settings(settings);
+    w.weather(weather);
+    w.seed(seed);
+    std::vector<msg::ServiceName> required;
+    for (const auto& s : config.RequiredServices()) required.emplace_back(s);
+    w.required_services(required);
+    world_writer.Write(w);
+  }
+
+  void PublishMap() {
+    msg::MapData m;
+    m.run(run);
+    m.name(map_name);
+    m.opendrive(map_opendrive);
+    m.scene(map_scene);
+    m.content_hash(Fnv1a64().Add(std::string_view(map_opendrive)).Add(std::string_view(map_scene)).value());
+    map_writer.Write(m);
+  }
+
+  void LoadMapFile(const std::string& path) {
+    map_opendrive = ReadFile(path);
+    std::filesystem::path p(path);
+    map_name = p.stem().string();
+    std::filesystem::path scene = p.parent_path() / (p.stem().string() + ".scene.yaml");
+    map_scene = std::filesystem::exists(scene) ? ReadFile(scene.string()) : std::string();
+  }
+
+  void PublishStatus(Clock::time_point now) {
+    msg::RunStatus s;
+    s.run(run);
+    s.state(state);
+    s.frame(frame);
+    s.sim_time(sim_time);
+    while (!recent_done.empty() && now - recent_done.front() > std::chrono::seconds(1)) recent_done.pop_front();
+    double rate = 0;
+    if (recent_done.size() >= 2) {
+      const double span = std::chrono::duration<double>(recent_done.back() - recent_done.front()).count();
+      if (span > 0) rate = (recent_done.size() - 1) / span;
+    }
+    s.tick_rate_hz(rate);
+    s.real_time_factor(rate * settings.fixed_delta_seconds());
+    std::vector<msg::MemberStatus> list;
+    for (const auto& [name, m] : members) {
+      msg::MemberStatus ms;
+      ms.service(name);
+      ms.kind(m.kind);
+      ms.alive(m.alive);
+      ms.required(m.required);
+      ms.last_frame(m.last_frame);
+      ms.last_step_wall_us(m.last_step_us);
+      list.push_back(ms);
+    }
+    s.members(list);
+    s.failed_service(failed_service);
+    s.reason(failure_reason.substr(0, 511));
+    status_writer.Write(s);
+    last_status = now;
+    status_dirty = false;
+  }
+
+  void SetState(RunState next) {
+    if (next == state) return;
+    spdlog::info("run {} frame {}: {} -> {}", run, frame, RunStateName(state), RunStateName(next));
+    state = next;
+    status_dirty = true;
+  }
+
+  // Starts a new run (reset or new map): actors gone, frame 0.
+  void NewRun(uint64_t new_seed) {
+    ++run;
+    if (new_seed != 0) seed = new_seed;
+    frame = 0;
+    sim_time = 0;
+    barrier.Close();
+    commands.ResetActors();
+    ticks_requested = 0;
+    PublishWorld();
+    PublishMap();
+    status_dirty = true;
+    spdlog::info("run {} begins (map '{}', seed {})", run, map_name, seed);
+  }
+
+  void HandleCommands() {
+    while (!inbox.empty()) {
+      msg::Command c = std::move(inbox.front());
+      inbox.pop_front();
+      msg::CommandReply reply;
+      const auto kind = c.body()._d();
+      // A map given by name must exist before the command is accepted.
+      if (kind == msg::CommandKind::CMD_LOAD_MAP && c.body().load_map().opendrive().empty() &&
+          c.body().load_map().name().to_string() != map_name &&
+          !std::filesystem::exists(c.body().load_map().name().to_string())) {
+        reply.client(c.client());
+        reply.sequence_number(c.sequence_number());
+        reply.accepted(false);
+        reply.reason("unknown map '" + c.body().load_map().name().to_string() + "': give a path to an .xodr file or inline OpenDRIVE");
+        reply_writer.Write(reply);
+        continue;
+      }
+      reply = commands.Submit(c, run, frame + 1 + (barrier.open() ? 1 : 0), settings.synchronous_mode());
+      if (reply.accepted()) {
+        switch (kind) {
+          case msg::CommandKind::CMD_TICK:
+            ticks_requested += c.body().tick_request().count();
+            break;
+          case msg::CommandKind::CMD_SET_WEATHER:
+            weather = c.body().weather();
+            PublishWorld();
+            break;
+          case msg::CommandKind::CMD_SET_WORLD_SETTINGS:
+            settings = c.body().world_settings();
+            PublishWorld();
+            break;
+          case msg::CommandKind::CMD_RESET:
+            commands.TakePending();
+            NewRun(c.body().reset().seed());
+            reply.run(run);
+            reply.frame(1);
+            break;
+          case msg::CommandKind::CMD_LOAD_MAP: {
+            commands.TakePending();
+            const auto& lm = c.body().load_map();
+            if (!lm.opendrive().empty()) {
+              map_opendrive = lm.opendrive();
+              map_scene = lm.scene();
+              map_name = lm.name().to_string().empty() ? "inline" : lm.name().to_string();
+            } else if (lm.name().to_string() != map_name) {
+              LoadMapFile(lm.name().to_string());
+            }
+            NewRun(0);
+            reply.run(run);
+            reply.frame(1);
+            break;
+          }
+          default:
+            break;
+        }
+      } else {
+        spdlog::warn("rejected command {} from '{}': {}", c.sequence_number(), c.client().to_string(), reply.reason().to_string());
+      }
+      reply_writer.Write(reply);
+    }
+  }
+
+  // Required services that are not alive, with reasons; empty if all are.
+  std::string CheckMembers(std::string* failed) {
+    for (const auto& name : config.RequiredServices()) {
+      auto it = members.find(name);
+      if (it == members.end() || !it->second.alive) {
+        *failed = name;
+        if (it == members.end()) return "has not joined";
+        return it->second.failure.empty() ? "has not announced ready" : it->second.failure;
+      }
+    }
+    return {};
+  }
+
+  void StartTick(Clock::time_point now) {
+    msg::Tick t;
+    t.run(run);
+    t.frame(frame + 1);
+    t.dt(settings.fixed_delta_seconds());
+    t.sim_time(sim_time + settings.fixed_delta_seconds());
+    t.seed(seed);
+    t.commands(commands.TakePending());
+    open_tick = t;
+    barrier.Open(run, t.frame(), config.RequiredServices());
+    tick_sent = now;
+    tick_deadline = now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(settings.service_timeout()));
+    tick_writer.Write(open_tick);
+  }
+
+  void ResendTick(Clock::time_point now) {
+    // Same frame, same commands: services that already did it ack again.
+    barrier.Open(run, open_tick.frame(), config.RequiredServices());
+    tick_sent = now;
+    tick_deadline = now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(settings.service_timeout()));
+    tick_writer.Write(open_tick);
+  }
+
+  void CompleteTick(Clock::time_point now) {
+    frame = open_tick.frame();
+    sim_time = open_tick.sim_time();
+    msg::FrameDone d;
+    d.run(run);
+    d.frame(frame);
+    d.sim_time(sim_time);
+    d.world_hash(barrier.WorldHash());
+    barrier.Close();
+    done_writer.Write(d);
+    barrier_us_sum += std::chrono::duration<double, std::micro>(now - tick_sent).count();
+    ++barrier_count;
+    recent_done.push_back(now);
+    while (recent_done.size() > 4096) recent_done.pop_front();
+  }
+};
+
+Coordinator::Coordinator(Bus& bus, LaunchConfig config) : impl_(std::make_unique<Impl>(bus, std::move(config))) {
+  auto& s = *impl_;
+  s.seed = s.config.seed;
+  s.settings = s.config.world;
+  s.weather = DefaultWeather();
+  for (const auto& name : s.config.RequiredServices()) s.members[name].required = true;
+  if (!s.config.map.empty()) s.LoadMapFile(s.config.map);
+  s.tick_writer = Writer<msg::Tick>(bus, topics::kTick);
+  s.world_writer = Writer<msg::WorldInfo>(bus, topics::kWorldInfo);
+  s.map_writer = Writer<msg::MapData>(bus, topics::kMap);
+  s.status_writer = Writer<msg::RunStatus>(bus, topics::kRunStatus);
+  s.done_writer = Writer<msg::FrameDone>(bus, topics::kFrameDone);
+  s.reply_writer = Writer<msg::CommandReply>(bus, topics::kCommandReply);
+  {
+    std::lock_guard<std::mutex> lock(s.mu);
+    s.PublishWorld();
+    s.PublishMap();
+  }
+  s.ack_reader = Reader<msg::Ack>(
+      bus, topics::kAck, [&s](const msg::Ack& a, const SampleInfo& i) { s.OnAck(a, i); },
+      [&s](const LivelinessChange& c) { s.OnLiveliness(c); });
+  s.service_reader = Reader<msg::ServiceAnnounce>(bus, topics::kService,
+                                                  [&s](const msg::ServiceAnnounce& a, const SampleInfo&) { s.OnAnnounce(a); });
+  s.command_reader = Reader<msg::Command>(bus, topics::kCommand, [&s](const msg::Command& c, const SampleInfo&) { s.OnCommand(c); });
+}
+
+Coordinator::~Coordinator() = default;
+
+CoordinatorStats Coordinator::stats() const {
+  std::lock_guard<std::mutex> lock(impl_->mu);
+  CoordinatorStats st;
+  st.frames = impl_->frame;
+  st.mean_barrier_us = impl_->barrier_count ? impl_->barrier_us_sum / impl_->barrier_count : 0;
+  const auto& r = impl_->recent_done;
+  if (r.size() >= 2) {
+    st.tick_rate_hz = (r.size() - 1) / std::chrono::duration<double>(r.back() - r.front()).count();
+  }
+  return st;
+}
+
+int Coordinator::Run(const std::atomic<bool>& stop) {
+  auto& s = *impl_;
+  std::unique_lock<std::mutex> lock(s.mu);
+  spdlog::info("coordinator on {}: waiting for {} required service(s)", s.bus.Describe(), s.config.RequiredServices().size());
+  s.next_tick_at = Clock::now();
+  while (!stop) {
+    const auto now = Clock::now();
+    s.HandleCommands();
+
+    std::string failed;
+    const std::string why = s.CheckMembers(&failed);
+    if (!why.empty()) {
+      if (s.state == RunState::RUN_RUNNING || s.state == RunState::RUN_READY ||
+          (s.state == RunState::RUN_FAULTED && failed != s.failed_service)) {
+        s.failed_service = failed;
+        s.failure_reason = "service '" + failed + "' " + why;
+        spdlog::error("stopping the clock at frame {}: {}", s.frame, s.failure_reason);
+        s.SetState(RunState::RUN_FAULTED);
+      }
+    } else if (s.state == RunState::RUN_WAITING_FOR_SERVICES || s.state == RunState::RUN_FAULTED) {
+      if (s.state == RunState::RUN_FAULTED) spdlog::info("all required services are back: resuming at frame {}", s.frame + 1);
+      s.failed_service.clear();
+      s.failure_reason.clear();
+      s.SetState(s.settings.synchronous_mode() ? RunState::RUN_READY : RunState::RUN_RUNNING);
+      if (s.barrier.open()) s.ResendTick(now);
+    }
+
+    const bool active = s.state == RunState::RUN_RUNNING || s.state == RunState::RUN_READY;
+    Clock::time_point wake = now + std::chrono::milliseconds(200);
+    if (active && s.barrier.open()) {
+      if (s.barrier.Complete()) {
+        s.CompleteTick(now);
+        if (s.config.ticks > 0 && s.frame >= s.config.ticks && !s.settings.synchronous_mode()) {
+          s.SetState(RunState::RUN_STOPPED);
+          s.PublishStatus(now);
+          spdlog::info("finished {} ticks", s.frame);
+          return 0;
+        }
+      } else if (now >= s.tick_deadline) {
+        std::string missing;
+        for (const auto& m : s.barrier.Missing()) missing += (missing.empty() ? "" : ", ") + m;
+        s.failed_service = s.barrier.Missing().front();
+        s.failure_reason = "service '" + s.failed_service + "' did not acknowledge frame " + std::to_string(s.barrier.frame()) +
+                           " within " + std::to_string(s.settings.service_timeout()) + " s (missing: " + missing + ")";
+        auto it = s.members.find(s.failed_service);
+        if (it != s.members.end()) {
+          it->second.alive = false;
+          it->second.failure = "timed out on frame " + std::to_string(s.barrier.frame());
+        }
+        spdlog::error("stopping the clock: {}", s.failure_reason);
+        s.SetState(RunState::RUN_FAULTED);
+        continue;
+      } else {
+        wake = std::min(wake, s.tick_deadline);
+      }
+    }
+    if (active && !s.barrier.open()) {
+      if (s.settings.synchronous_mode()) {
+        s.SetState(s.ticks_requested > 0 ? RunState::RUN_RUNNING : RunState::RUN_READY);
+        if (s.ticks_requested > 0) {
+          --s.ticks_requested;
+          s.StartTick(now);
+        }
+      } else {
+        s.SetState(RunState::RUN_RUNNING);
+        const double rtf = s.settings.real_time_factor();
+        if (rtf > 0 && now < s.next_tick_at) {
+          wake = std::min(wake, s.next_tick_at);
+        } else {
+          if (rtf > 0) {
+            const auto period = std::chrono::duration_cast<Clock::duration>(
+                std::chrono::duration<double>(s.settings.fixed_delta_seconds() / rtf));
+            // Keep the pace without bursting after a stall.
+            s.next_tick_at = std::max(s.next_tick_at + period, now);
+          }
+          s.StartTick(now);
+        }
+      }
+    }
+
+    if (s.status_dirty || now - s.last_status > std::chrono::milliseconds(500)) s.PublishStatus(now);
+    if (s.barrier.open() && s.barrier.Complete()) continue;
+    s.cv.wait_until(lock, wake, [&] {
+      return stop || !s.inbox.empty() || s.status_dirty || (s.barrier.open() && s.barrier.Complete());
+    });
+  }
+  s.SetState(RunState::RUN_STOPPED);
+  s.PublishStatus(Clock::now());
+  return 0;
+}
+
+}  // namespace lockstep

@@ -1,0 +1,45 @@
+#pragma once
+// The launch config: which services make up a simulation and how the world runs.
+// Loaded from YAML (deploy/configs/*.yaml); unknown keys and bad values are errors
+// that name the key and line.
+#include <string>
+#include <vector>
+
+#include "lockstep/runtime/messages.h"
+
+namespace lockstep {
+
+struct ServiceLaunch {
+  std::string name;                 // unique service name
+  std::string kind;                 // what to run: air_sim, noop, cyclone_c, ...
+  std::string executable;           // program; empty = lockstep_<kind> next to the launcher
+  std::vector<std::string> args;    // extra arguments
+  bool required = true;             // the barrier waits for it
+  bool perception = false;
+  std::string restart = "never";    // never | on-failure (the launcher starts a replacement)
+  double step_delay_s = 0;          // noop only: simulated work per step
+};
+
+struct LaunchConfig {
+  std::string source = "(built-in)";  // file it came from, for messages
+  std::string name = "lockstep";
+  int domain_id = 0;                  // DDS domain
+  std::string participant_profile = "lockstep.participant";
+  std::string qos_file;               // empty = the built-in deploy/qos/fastdds.xml
+  uint64_t seed = 42;
+  std::string map;                    // path to an .xodr file (scene beside it as .scene.yaml); empty = none
+  uint64_t ticks = 0;                 // free-running: stop after this many ticks (0 = run until stopped)
+  std::string output_dir;             // where services write outputs; empty = none
+  msg::WorldSettings world;           // see DefaultWorldSettings()
+  std::vector<ServiceLaunch> services;
+
+  std::vector<std::string> RequiredServices() const;
+};
+
+msg::WorldSettings DefaultWorldSettings();
+LaunchConfig LoadLaunchConfig(const std::string& file);
+LaunchConfig ParseLaunchConfig(const std::string& yaml_text, const std::string& source_name);
+// Checks ranges and cross-field rules; throws InputError naming the field.
+void ValidateWorldSettings(const msg::WorldSettings& s, const std::string& where);
+
+}  // namespace lockstep

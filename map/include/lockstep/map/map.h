@@ -1,0 +1,116 @@
+#pragma once
+#include <memory>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "lockstep/map/opendrive.h"
+#include "lockstep/map/road_profile.h"
+#include "lockstep/map/waypoint.h"
+
+namespace lockstep::map {
+
+// One lane of one lane section: the node of the lane graph.
+struct LaneNode {
+  int road = -1, section = -1, lane = 0;
+  double s_begin = 0, s_end = 0;   // section extent along the road (m)
+  LaneType type = LaneType::None;
+  std::vector<int> successors;     // nodes reached when driving off this node's exit
+  std::vector<int> predecessors;
+  double Length() const { return s_end - s_begin; }
+  bool Forward() const { return lane < 0; }  // travels with increasing s
+  double EntryS() const { return Forward() ? s_begin : s_end; }
+  double ExitS() const { return Forward() ? s_end : s_begin; }
+};
+
+// Road point found by a lateral lookup (no projection onto a lane centre).
+struct LanePoint {
+  int node = -1;    // lane graph node
+  double s = 0, t = 0;
+};
+
+class SegmentIndex;  // spatial index over lane-centre segments (map_queries.cpp)
+
+// An OpenDRIVE road network with CARLA-style queries. Immutable after construction.
+class Map {
+ public:
+  explicit Map(OpenDrive data, std::string name = "");
+  ~Map();
+  Map(Map&&) noexcept;
+  Map& operator=(Map&&) noexcept;
+
+  static Map Load(const std::string& xodr_path);
+  static Map FromString(const std::string& xodr_text, const std::string& name = "<memory>");
+
+  const OpenDrive& Data() const { return data_; }
+  const std::string& Name() const { return name_; }
+  const std::vector<LaneNode>& Nodes() const { return nodes_; }
+  int NodeOf(int road, int section, int lane) const;  // -1 if none
+  int NodeOf(const Waypoint& wp) const { return NodeOf(wp.road, wp.section, wp.lane); }
+
+  // Builds a waypoint; s is clamped to the section. Section -1 picks it from s.
+  Waypoint MakeWaypoint(int road, int section, int lane, double s) const;
+
+  // Nearest lane-centre point whose lane type is in `types` (CARLA get_waypoint with
+  // project_to_road=true). With project_to_road=false, the lane that contains the
+  // point (if its type is in `types`), else nothing.
+  std::optional<Waypoint> NearestWaypoint(const Eigen::Vector3d& p, bool project_to_road = true,
+                                          LaneTypeMask types = LaneType::Driving) const;
+  // All lanes whose area contains the point (x, y), any type (junction roads overlap).
+  std::vector<LanePoint> LanesAt(double x, double y) const;
+
+  // Waypoints `distance` metres ahead along the lane's travel direction, one per branch;
+  // empty at a dead end. Previous() walks against the travel direction.
+  std::vector<Waypoint> Next(const Waypoint& wp, double distance) const;
+  std::vector<Waypoint> Previous(const Waypoint& wp, double distance) const;
+  // Waypoints every `distance` metres along the lane to its end (CARLA next_until_lane_end).
+  std::vector<Waypoint> NextUntilLaneEnd(const Waypoint& wp, double distance) const;
+
+  // Neighbouring lanes relative to the travel direction (may travel the other way).
+  std::optional<Waypoint> LeftLane(const Waypoint& wp) const;
+  std::optional<Waypoint> RightLane(const Waypoint& wp) const;
+  std::optional<LaneMarking> LeftMarking(const Waypoint& wp) const;
+  std::optional<LaneMarking> RightMarking(const Waypoint& wp) const;
+  LaneChange AllowedLaneChange(const Waypoint& wp) const;
+
+  // Waypoints every `distance` metres on every lane of the given types.
+  std::vector<Waypoint> GenerateWaypoints(double distance, LaneTypeMask types = LaneType::Driving) const;
+  // (entry, exit) waypoint of every driving lane section, like CARLA get_topology().
+  std::vector<std::pair<Waypoint, Waypoint>> Topology() const;
+  // (entry, exit) of every lane of a junction's connecting roads, like carla.Junction.get_waypoints.
+  std::vector<std::pair<Waypoint, Waypoint>> JunctionWaypoints(int junction,
+                                                               LaneTypeMask types = LaneType::Driving) const;
+  // Vehicle spawn points on driving lanes outside junctions, every ~`spacing` metres,
+  // 0.5 m above the road. Deterministic.
+  std::vector<Transform> SpawnPoints(double spacing = 25.0) const;
+  // Pedestrian spawn points on sidewalk lane centres.
+  std::vector<Transform> PedestrianSpawnPoints(double spacing = 20.0) const;
+
+  // Speed limit (m/s) for a waypoint: last speed-limit sign passed on its road in its
+  // travel direction, else the lane's <speed>, else the road type's, else `fallback`.
+  double SpeedLimit(const Waypoint& wp, double fallback = 30.0 / 3.6) const;
+
+  // Axis-aligned bounds of all roads (m).
+  Eigen::Vector2d BoundsMin() const { return bounds_min_; }
+  Eigen::Vector2d BoundsMax() const { return bounds_max_; }
+
+ private:
+  void BuildGraph();
+  void LinkRoadEnd(int node_id, bool at_end);
+  std::vector<Waypoint> Walk(const Waypoint& wp, double distance, bool forward, int depth) const;
+  std::optional<Waypoint> Neighbour(const Waypoint& wp, int lane) const;
+  std::optional<LaneMarking> MarkingBetween(const Waypoint& wp, int lane_a, int lane_b) const;
+
+  OpenDrive data_;
+  std::string name_;
+  std::vector<LaneNode> nodes_;
+  std::vector<std::vector<int>> node_lookup_;  // [road][section * stride + lane + offset]
+  std::vector<int> lookup_offset_, lookup_stride_;
+  std::unique_ptr<SegmentIndex> index_;
+  Eigen::Vector2d bounds_min_ = Eigen::Vector2d::Zero(), bounds_max_ = Eigen::Vector2d::Zero();
+};
+
+}  // namespace lockstep::map

@@ -1,0 +1,46 @@
+#pragma once
+#include <cstdint>
+#include <string>
+
+#include <Eigen/Core>
+
+#include "lockstep/map/opendrive.h"
+
+namespace lockstep::map {
+
+// Pose in the world frame: ENU metres, yaw/pitch/roll in radians (yaw CCW from +x).
+// CARLA's API shows the same pose with y negated and angles in degrees (left-handed).
+struct Transform {
+  Eigen::Vector3d location = Eigen::Vector3d::Zero();
+  double yaw = 0, pitch = 0, roll = 0;
+  Eigen::Vector3d Forward() const;
+};
+
+// CARLA's carla.LaneChange: which neighbour the road marks allow moving into.
+enum class LaneChange : std::uint8_t { None = 0, Right = 1, Left = 2, Both = 3 };
+
+struct LaneMarking {
+  RoadMarkType type = RoadMarkType::None;
+  RoadMarkColor color = RoadMarkColor::Standard;
+  LaneChange lane_change = LaneChange::None;  // which side may cross it (CARLA semantics)
+  double width = 0;                           // (m)
+};
+
+// A point on a lane centre, CARLA-style. (road, section, lane, s) identify it;
+// the rest is derived by Map::MakeWaypoint.
+struct Waypoint {
+  int road = -1;      // index into OpenDrive::roads
+  int section = -1;   // index into Road::sections
+  int lane = 0;       // OpenDRIVE lane id; negative lanes travel with s, positive against
+  double s = 0;       // road coordinate (m)
+  // Derived:
+  std::uint64_t id = 0;           // stable hash of (road, section, lane, s in mm)
+  Transform transform;            // on the lane centre, yaw along the lane's travel direction
+  double lane_width = 0;          // (m)
+  LaneType lane_type = LaneType::None;
+  int junction = -1;              // junction index, -1 if the road is not inside one
+  bool IsJunction() const { return junction >= 0; }
+  bool Valid() const { return road >= 0; }
+};
+
+}  // namespace lockstep::map

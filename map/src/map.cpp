@@ -1,0 +1,329 @@
+#include "lockstep/map/map.h"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "lockstep/map/opendrive_reader.h"
+#include "map_internal.h"
+
+namespace lockstep::map {
+
+Eigen::Vector3d Transform::Forward() const {
+  return {std::cos(pitch) * std::cos(yaw), std::cos(pitch) * std::sin(yaw), std::sin(pitch)};
+}
+
+Map::Map(OpenDrive data, std::string name) : data_(std::move(data)), name_(std::move(name)) {
+  BuildGraph();
+  index_ = BuildSegmentIndex(*this, &bounds_min_, &bounds_max_);
+}
+Map::~Map() = default;
+Map::Map(Map&&) noexcept = default;
+Map& Map::operator=(Map&&) noexcept = default;
+
+Map Map::Load(const std::string& path) {
+  const std::size_t slash = path.find_last_of('/');
+  std::string name = slash == std::string::npos ? path : path.substr(slash + 1);
+  if (name.size() > 5 && name.substr(name.size() - 5) == ".xodr") name.resize(name.size() - 5);
+  return Map(LoadOpenDriveFile(path), name);
+}
+
+Map Map::FromString(const std::string& text, const std::string& name) { return Map(ParseOpenDrive(text, name), name); }
+
+int Map::NodeOf(int road, int section, int lane) const {
+  if (road < 0 || road >= static_cast<int>(node_lookup_.size())) return -1;
+  const auto r = static_cast<std::size_t>(road);
+  const int col = lookup_offset_[r] - lane;
+  if (section < 0 || col < 0 || col >= lookup_stride_[r]) return -1;
+  const std::size_t idx = static_cast<std::size_t>(section * lookup_stride_[r] + col);
+  return idx < node_lookup_[r].size() ? node_lookup_[r][idx] : -1;
+}
+
+void Map::BuildGraph() {
+  nodes_.clear();
+  node_lookup_.assign(data_.roads.size(), {});
+  lookup_offset_.assign(data_.roads.size(), 0);
+  lookup_stride_.assign(data_.roads.size(), 1);
+  for (std::size_t r = 0; r < data_.roads.size(); ++r) {
+    const Road& road = data_.roads[r];
+    int max_left = 0, max_right = 0;
+    for (const LaneSection& sec : road.sections) {
+      max_left = std::max(max_left, sec.left_count);
+      max_right = std::max(max_right, static_cast<int>(sec.lanes.size()) - sec.left_count - 1);
+    }
+    lookup_offset_[r] = max_left;
+    lookup_stride_[r] = max_left + max_right + 1;
+    node_lookup_[r].assign(road.sections.size() * static_cast<std::size_t>(lookup_stride_[r]), -1);
+    for (std::size_t si = 0; si < road.sections.size(); ++si) {
+      const LaneSection& sec = road.sections[si];
+      for (const Lane& lane : sec.lanes) {
+        if (lane.id == 0) continue;
+        LaneNode n;
+        n.road = static_cast<int>(r);
+        n.section = static_cast<int>(si);
+        n.lane = lane.id;
+        n.s_begin = sec.s;
+        n.s_end = sec.s + sec.length;
+        n.type = lane.type;
+        node_lookup_[r][si * static_cast<std::size_t>(lookup_stride_[r]) +
+                        static_cast<std::size_t>(max_left - lane.id)] = static_cast<int>(nodes_.size());
+        nodes_.push_back(std::move(n));
+      }
+    }
+  }
+  for (std::size_t i = 0; i < nodes_.size(); ++i) {
+    const LaneNode n = nodes_[i];
+    const Road& road = data_.roads[static_cast<std::size_t>(n.road)];
+    const LaneSection& sec = road.sections[static_cast<std::size_t>(n.section)];
+    const Lane& lane = *sec.Find(n.lane);
+    const bool forward = n.lane < 0;
+    const int next_section = n.section + (forward ? 1 : -1);
+    if (next_section >= 0 && next_section < static_cast<int>(road.sections.size())) {
+      std::vector<int> ids = forward ? lane.successors : lane.predecessors;
+      if (ids.empty()) ids.push_back(n.lane);
+      for (int id : ids) {
+        if ((id < 0) != forward) continue;  // a lane link may not reverse direction inside a road
+        const int target = NodeOf(n.road, next_section, id);
+        if (target >= 0) nodes_[i].successors.push_back(target);
+      }
+    } else {
+      LinkRoadEnd(static_cast<int>(i), forward);
+    }
+  }
+  for (std::size_t i = 0; i < nodes_.size(); ++i) {
+    auto& succ = nodes_[i].successors;
+    std::sort(succ.begin(), succ.end());
+    succ.erase(std::unique(succ.begin(), succ.end()), succ.end());
+    for (int t : succ) nodes_[static_cast<std::size_t>(t)].predecessors.push_back(static_cast<int>(i));
+  }
+}
+
+// Adds the successors of a node that leaves its road at the end (at_end) or the start.
+void Map::LinkRoadEnd(int node_id, bool at_end) {
+  LaneNode& n = nodes_[static_cast<std::size_t>(node_id)];
+  const Road& road = data_.roads[static_cast<std::size_t>(n.road)];
+  const Lane& lane = *road.sections[static_cast<std::size_t>(n.section)].Find(n.lane);
+  const RoadLink& link = at_end ? road.successor : road.predecessor;
+  auto add = [&](int target_road, ContactPoint cp, int target_lane) {
+    const Road& tr = data_.roads[static_cast<std::size_t>(target_road)];
+    if (tr.sections.empty()) return;
+    const bool enters_at_start = cp != ContactPoint::End;
+    if ((target_lane < 0) != enters_at_start) return;  // would travel back into this road
+    const int section = enters_at_start ? 0 : static_cast<int>(tr.sections.size()) - 1;
+    const int t = NodeOf(target_road, section, target_lane);
+    if (t >= 0) n.successors.push_back(t);
+  };
+  if (link.kind == RoadLink::Kind::Road) {
+    auto it = data_.road_index.find(link.element_id);
+    if (it == data_.road_index.end()) return;
+    const std::vector<int>& ids = at_end ? lane.successors : lane.predecessors;
+    if (!ids.empty()) {
+      for (int id : ids) add(it->second, link.contact, id);
+    } else {
+      add(it->second, link.contact, link.contact == ContactPoint::End ? std::abs(n.lane) : -std::abs(n.lane));
+    }
+  } else if (link.kind == RoadLink::Kind::Junction) {
+    auto jt = data_.junction_index.find(link.element_id);
+    if (jt == data_.junction_index.end()) return;
+    const RoadLink& other = at_end ? road.predecessor : road.successor;
+    const bool both_ends_here = other.kind == RoadLink::Kind::Junction && other.element_id == link.element_id;
+    const double exit_s = at_end ? road.length : 0.0;
+    const Eigen::Vector3d exit_p = RoadToWorld(road, exit_s, 0.0);
+    const Eigen::Vector3d other_p = RoadToWorld(road, road.length - exit_s, 0.0);
+    for (const Connection& c : data_.junctions[static_cast<std::size_t>(jt->second)].connections) {
+      if (c.incoming_road != road.id) continue;
+      auto ct = data_.road_index.find(c.connecting_road);
+      if (ct == data_.road_index.end()) continue;
+      const Road& cr = data_.roads[static_cast<std::size_t>(ct->second)];
+      if (both_ends_here) {  // pick the connections that touch this end
+        const Eigen::Vector3d cp = RoadToWorld(cr, c.contact == ContactPoint::End ? cr.length : 0.0, 0.0);
+        if ((cp - exit_p).squaredNorm() > (cp - other_p).squaredNorm()) continue;
+      }
+      for (const auto& [from, to] : c.lane_links)
+        if (from == n.lane) add(ct->second, c.contact, to);
+    }
+  }
+}
+
+Waypoint Map::MakeWaypoint(int road, int section, int lane, double s) const {
+  Waypoint wp;
+  if (road < 0 || road >= static_cast<int>(data_.roads.size())) return wp;
+  const Road& r = data_.roads[static_cast<std::size_t>(road)];
+  if (r.sections.empty()) return wp;
+  if (section < 0 || section >= static_cast<int>(r.sections.size()))
+    section = static_cast<int>(FindSection(r, s));
+  const LaneSection& sec = r.sections[static_cast<std::size_t>(section)];
+  s = std::clamp(s, sec.s, sec.s + sec.length);
+  wp.road = road;
+  wp.section = section;
+  wp.lane = lane;
+  wp.s = s;
+  const LaneSpan span = LaneSpanOf(r, static_cast<std::size_t>(section), lane, s);
+  double hdg = 0;
+  wp.transform.location = RoadToWorld(r, s, span.Center(), &hdg);
+  const double slope = RoadSlope(r, s);
+  const bool forward = lane <= 0;
+  wp.transform.yaw = forward ? hdg : hdg + std::numbers::pi;
+  wp.transform.yaw = std::remainder(wp.transform.yaw, 2 * std::numbers::pi);
+  wp.transform.pitch = std::atan(forward ? slope : -slope);
+  wp.lane_width = span.Width();
+  if (const Lane* l = sec.Find(lane)) wp.lane_type = l->type;
+  wp.junction = r.junction_index;
+  const auto mm = static_cast<std::uint64_t>(static_cast<std::int64_t>(std::llround(s * 1000.0)));
+  wp.id = (static_cast<std::uint64_t>(road) * 0x9E3779B97F4A7C15ull) ^
+          (static_cast<std::uint64_t>(section) << 48) ^ (static_cast<std::uint64_t>(lane + 512) << 36) ^ mm;
+  return wp;
+}
+
+std::vector<Waypoint> Map::Walk(const Waypoint& wp, double distance, bool forward, int depth) const {
+  const int id = NodeOf(wp);
+  if (id < 0 || depth > 256 || !(distance >= 0)) return {};
+  const LaneNode& n = nodes_[static_cast<std::size_t>(id)];
+  const double sign = ((n.lane < 0) == forward) ? 1.0 : -1.0;
+  const double room = sign > 0 ? n.s_end - wp.s : wp.s - n.s_begin;
+  if (distance <= room + 1e-9) return {MakeWaypoint(n.road, n.section, n.lane, wp.s + sign * distance)};
+  std::vector<Waypoint> out;
+  for (int next : forward ? n.successors : n.predecessors) {
+    const LaneNode& m = nodes_[static_cast<std::size_t>(next)];
+    const Waypoint entry = MakeWaypoint(m.road, m.section, m.lane, forward ? m.EntryS() : m.ExitS());
+    for (Waypoint& w : Walk(entry, distance - std::max(0.0, room), forward, depth + 1)) out.push_back(w);
+  }
+  return out;
+}
+
+std::vector<Waypoint> Map::Next(const Waypoint& wp, double distance) const { return Walk(wp, distance, true, 0); }
+std::vector<Waypoint> Map::Previous(const Waypoint& wp, double distance) const { return Walk(wp, distance, false, 0); }
+
+std::vector<Waypoint> Map::NextUntilLaneEnd(const Waypoint& wp, double distance) const {
+  std::vector<Waypoint> out;
+  const int id = NodeOf(wp);
+  if (id < 0 || !(distance > 0)) return out;
+  const LaneNode& n = nodes_[static_cast<std::size_t>(id)];
+  const double sign = n.Forward() ? 1.0 : -1.0;
+  const double room = sign > 0 ? n.s_end - wp.s : wp.s - n.s_begin;
+  for (double d = distance; d < room; d += distance) out.push_back(MakeWaypoint(n.road, n.section, n.lane, wp.s + sign * d));
+  out.push_back(MakeWaypoint(n.road, n.section, n.lane, n.ExitS()));
+  return out;
+}
+
+std::optional<Waypoint> Map::Neighbour(const Waypoint& wp, int lane) const {
+  if (lane == 0 || NodeOf(wp.road, wp.section, lane) < 0) return std::nullopt;
+  return MakeWaypoint(wp.road, wp.section, lane, wp.s);
+}
+
+namespace {
+int LeftOf(int lane) { return lane < 0 ? (lane + 1 == 0 ? 1 : lane + 1) : (lane - 1 == 0 ? -1 : lane - 1); }
+int RightOf(int lane) { return lane < 0 ? lane - 1 : lane + 1; }
+bool Allows(MarkLaneChange m, int from, int to) {
+  switch (m) {
+    case MarkLaneChange::Both: return true;
+    case MarkLaneChange::None: return false;
+    case MarkLaneChange::Increase: return to > from;
+    case MarkLaneChange::Decrease: return to < from;
+  }
+  return false;
+}
+}  // namespace
+
+std::optional<Waypoint> Map::LeftLane(const Waypoint& wp) const { return Neighbour(wp, LeftOf(wp.lane)); }
+std::optional<Waypoint> Map::RightLane(const Waypoint& wp) const { return Neighbour(wp, RightOf(wp.lane)); }
+
+// The marking on the border between lane_a and its neighbour lane_b (|b| = |a| +- 1 or across 0).
+std::optional<LaneMarking> Map::MarkingBetween(const Waypoint& wp, int lane_a, int lane_b) const {
+  if (wp.road < 0) return std::nullopt;
+  const Road& r = data_.roads[static_cast<std::size_t>(wp.road)];
+  const LaneSection& sec = r.sections[static_cast<std::size_t>(wp.section)];
+  // A border belongs to the lane farther from the centre; the centre line to lane 0.
+  int owner;
+  if ((lane_a < 0) != (lane_b < 0)) owner = 0;
+  else owner = std::abs(lane_a) > std::abs(lane_b) ? lane_a : lane_b;
+  const Lane* l = sec.Find(owner);
+  if (!l) return std::nullopt;
+  const RoadMark* m = MarkAt(*l, wp.s - sec.s);
+  LaneMarking out;
+  if (!m) return out;
+  out.type = m->type;
+  out.color = m->color;
+  out.width = m->width;
+  const bool to_left = lane_b == LeftOf(lane_a);
+  if (m->lane_change == MarkLaneChange::Both) out.lane_change = LaneChange::Both;
+  else if (Allows(m->lane_change, lane_a, lane_b)) out.lane_change = to_left ? LaneChange::Left : LaneChange::Right;
+  else out.lane_change = LaneChange::None;
+  return out;
+}
+
+std::optional<LaneMarking> Map::LeftMarking(const Waypoint& wp) const {
+  const int inner = wp.lane < 0 ? wp.lane + 1 : wp.lane - 1;  // towards the centre lane
+  if (inner == 0) {
+    // The border with the centre lane: owner lane 0.
+    const Road& r = data_.roads[static_cast<std::size_t>(wp.road)];
+    const LaneSection& sec = r.sections[static_cast<std::size_t>(wp.section)];
+    const Lane* c = sec.Find(0);
+    LaneMarking out;
+    const RoadMark* m = c ? MarkAt(*c, wp.s - sec.s) : nullptr;
+    if (!m) return out;
+    out.type = m->type;
+    out.color = m->color;
+    out.width = m->width;
+    const int other = LeftOf(wp.lane);
+    out.lane_change = m->lane_change == MarkLaneChange::Both ? LaneChange::Both
+                      : Allows(m->lane_change, wp.lane, other) ? LaneChange::Left
+                                                                : LaneChange::None;
+    return out;
+  }
+  return MarkingBetween(wp, wp.lane, inner);
+}
+
+std::optional<LaneMarking> Map::RightMarking(const Waypoint& wp) const {
+  if (wp.road < 0) return std::nullopt;
+  return MarkingBetween(wp, wp.lane, RightOf(wp.lane));
+}
+
+LaneChange Map::AllowedLaneChange(const Waypoint& wp) const {
+  int bits = 0;
+  const auto left = LeftMarking(wp), right = RightMarking(wp);
+  if (left && (left->lane_change == LaneChange::Both || left->lane_change == LaneChange::Left) && LeftLane(wp))
+    bits |= static_cast<int>(LaneChange::Left);
+  if (right && (right->lane_change == LaneChange::Both || right->lane_change == LaneChange::Right) && RightLane(wp))
+    bits |= static_cast<int>(LaneChange::Right);
+  return static_cast<LaneChange>(bits);
+}
+
+double Map::SpeedLimit(const Waypoint& wp, double fallback) const {
+  if (wp.road < 0) return fallback;
+  const Road& r = data_.roads[static_cast<std::size_t>(wp.road)];
+  const bool forward = wp.lane < 0;
+  double best_s = -1, best = std::numeric_limits<double>::quiet_NaN();
+  auto consider = [&](double s, double t, const std::string& orientation, double mps) {
+    bool serves;
+    if (orientation == "+") serves = forward;
+    else if (orientation == "-") serves = !forward;
+    else serves = (t <= 0) == forward;
+    if (!serves || !std::isfinite(mps) || mps <= 0) return;
+    const double behind = forward ? wp.s - s : s - wp.s;
+    if (behind < -1e-6) return;
+    if (best_s < 0 || behind < best_s) {
+      best_s = behind;
+      best = mps;
+    }
+  };
+  for (const Signal& sig : r.signals) {
+    if (sig.type != "274") continue;  // German catalogue id for "maximum speed", used by OpenDRIVE
+    const double v = sig.unit == "mph" ? sig.value * 0.44704 : sig.unit == "m/s" ? sig.value : sig.value / 3.6;
+    consider(sig.s, sig.t, sig.orientation, v);
+  }
+  for (const RoadObject& o : r.objects) {
+    // RoadRunner exports (CARLA towns) place speed signs as objects named "Speed_<km/h>".
+    if (o.name.rfind("Speed_", 0) != 0) continue;
+    const double kmh = std::atof(o.name.c_str() + 6);
+    consider(o.s, o.t, "", kmh / 3.6);
+  }
+  if (std::isfinite(best)) return best;
+  const LaneSection& sec = r.sections[static_cast<std::size_t>(wp.section)];
+  if (const Lane* l = sec.Find(wp.lane); l && std::isfinite(l->speed_max_mps)) return l->speed_max_mps;
+  for (auto it = r.types.rbegin(); it != r.types.rend(); ++it)
+    if (it->s <= wp.s + 1e-9 && std::isfinite(it->speed_max_mps)) return it->speed_max_mps;
+  return fallback;
+}
+
+}  // namespace lockstep::map

@@ -233,10 +233,11 @@ std::optional<LaneMarking> Map::MarkingBetween(const Waypoint& wp, int lane_a, i
   if (wp.road < 0) return std::nullopt;
   const Road& r = data_.roads[static_cast<std::size_t>(wp.road)];
   const LaneSection& sec = r.sections[static_cast<std::size_t>(wp.section)];
-  // A border belongs to the lane farther from the centre; the centre line to lane 0.
+  // A lane's <roadMark> is its outer border, so a border belongs to the lane nearer the
+  // centre; the centre line belongs to lane 0.
   int owner;
   if ((lane_a < 0) != (lane_b < 0)) owner = 0;
-  else owner = std::abs(lane_a) > std::abs(lane_b) ? lane_a : lane_b;
+  else owner = std::abs(lane_a) < std::abs(lane_b) ? lane_a : lane_b;
   const Lane* l = sec.Find(owner);
   if (!l) return std::nullopt;
   const RoadMark* m = MarkAt(*l, wp.s - sec.s);

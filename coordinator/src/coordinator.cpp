@@ -4,6 +4,7 @@
 #include <condition_variable>
 #include <deque>
 #include <filesystem>
+#include <functional>
 #include <fstream>
 #include <map>
 #include <mutex>
@@ -21,6 +22,9 @@ namespace lockstep {
 using Clock = std::chrono::steady_clock;
 using msg::RunState;
 
+// Services announce themselves every 100 ms; silence this long means failure.
+constexpr auto kHeartbeatTimeout = std::chrono::milliseconds(600);
+
 namespace {
 
 struct Member {
@@ -29,7 +33,7 @@ struct Member {
   bool ready = false;         // announced READY since it (re)joined
   bool alive = false;         // ready and its ack writer's liveliness holds
   int32_t pid = 0;
-  uint64_t ack_writer = 0;    // writer id of its Ack DataWriter
+  Clock::time_point last_heard;  // last announcement (heartbeat)
   uint64_t last_frame = 0;
   double last_step_us = 0;
   std::string failure;        // why it is not alive, if it failed
@@ -121,19 +125,34 @@ struct Coordinator::Impl {
   Writer<msg::RunStatus> status_writer;
   Writer<msg::FrameDone> done_writer;
   Writer<msg::CommandReply> reply_writer;
+  // DDS writes happen with `mu` released: a middleware thread may be waiting on
+  // `mu` in a callback while a write needs that thread's progress.
+  std::vector<std::function<void()>> outbox;
+  template <class T>
+  void Post(Writer<T>& w, T sample) {
+    outbox.push_back([&w, s = std::move(sample)] { w.Write(s); });
+  }
+  void Flush(std::unique_lock<std::mutex>& lock) {
+    if (outbox.empty()) return;
+    std::vector<std::function<void()>> work;
+    work.swap(outbox);
+    lock.unlock();
+    for (auto& f : work) f();
+    lock.lock();
+  }
+
   Reader<msg::Ack> ack_reader;
   Reader<msg::ServiceAnnounce> service_reader;
   Reader<msg::Command> command_reader;
 
   // --- callbacks (middleware threads) ---
-  void OnAck(const msg::Ack& a, const SampleInfo& info) {
+  void OnAck(const msg::Ack& a) {
     bool wake = false;
     {
       std::lock_guard<std::mutex> lock(mu);
       const std::string name = a.service().to_string();
       auto it = members.try_emplace(name).first;
       Member& m = it->second;
-      m.ack_writer = info.writer_id;
       if (a.run() == run) {
         m.last_frame = a.frame();
         m.last_step_us = a.step_wall_us();
@@ -144,32 +163,14 @@ struct Coordinator::Impl {
     if (wake) cv.notify_one();
   }
 
-  void OnLiveliness(const LivelinessChange& change) {
-    {
-      std::lock_guard<std::mutex> lock(mu);
-      for (auto& [name, m] : members) {
-        if (m.ack_writer != change.writer_id || change.writer_id == 0) continue;
-        if (!change.alive && m.alive) {
-          m.alive = false;
-          m.failure = "lost liveliness: no heartbeat for 500 ms (process crashed, hung or stopped)";
-          spdlog::error("service '{}' (pid {}) {}", name, m.pid, m.failure);
-        } else if (change.alive && m.ready && !m.alive) {
-          m.alive = true;
-          m.failure.clear();
-          spdlog::info("service '{}' is alive again", name);
-        }
-        status_dirty = true;
-      }
-    }
-    cv.notify_one();
-  }
-
   void OnAnnounce(const msg::ServiceAnnounce& a) {
     {
       std::lock_guard<std::mutex> lock(mu);
       Member& m = members[a.service().to_string()];
       m.kind = a.kind().to_string();
+      m.last_heard = Clock::now();
       if (a.state() == msg::ServiceState::SERVICE_READY) {
+        if (!m.alive) status_dirty = true;
         if (!m.alive) spdlog::info("service '{}' ({}, pid {} on {}) joined at frame {}", a.service().to_string(),
                                    a.kind().to_string(), a.pid(), a.host().to_string(), a.last_frame());
         m.ready = true;
@@ -186,8 +187,8 @@ struct Coordinator::Impl {
         m.ready = false;
         m.alive = false;
       }
+      if (m.pid != a.pid()) status_dirty = true;
       m.pid = a.pid();
-      status_dirty = true;
     }
     cv.notify_one();
   }
@@ -212,7 +213,7 @@ struct Coordinator::Impl {
     std::vector<msg::ServiceName> required;
     for (const auto& s : config.RequiredServices()) required.emplace_back(s);
     w.required_services(required);
-    world_writer.Write(w);
+    Post(world_writer, w);
   }
 
   void PublishMap() {
@@ -222,7 +223,7 @@ struct Coordinator::Impl {
     m.opendrive(map_opendrive);
     m.scene(map_scene);
     m.content_hash(Fnv1a64().Add(std::string_view(map_opendrive)).Add(std::string_view(map_scene)).value());
-    map_writer.Write(m);
+    Post(map_writer, m);
   }
 
   void LoadMapFile(const std::string& path) {
@@ -261,7 +262,7 @@ struct Coordinator::Impl {
     s.members(list);
     s.failed_service(failed_service);
     s.reason(failure_reason.substr(0, 511));
-    status_writer.Write(s);
+    Post(status_writer, s);
     last_status = now;
     status_dirty = false;
   }
@@ -302,7 +303,7 @@ struct Coordinator::Impl {
         reply.sequence_number(c.sequence_number());
         reply.accepted(false);
         reply.reason("unknown map '" + c.body().load_map().name().to_string() + "': give a path to an .xodr file or inline OpenDRIVE");
-        reply_writer.Write(reply);
+        Post(reply_writer, reply);
         continue;
       }
       reply = commands.Submit(c, run, frame + 1 + (barrier.open() ? 1 : 0), settings.synchronous_mode());
@@ -346,7 +347,21 @@ struct Coordinator::Impl {
       } else {
         spdlog::warn("rejected command {} from '{}': {}", c.sequence_number(), c.client().to_string(), reply.reason().to_string());
       }
-      reply_writer.Write(reply);
+      Post(reply_writer, reply);
+    }
+  }
+
+  // Marks silent members dead: a killed or stopped process stops its heartbeats.
+  void CheckHeartbeats(Clock::time_point now) {
+    for (auto& [name, m] : members) {
+      if (m.alive && now - m.last_heard > kHeartbeatTimeout) {
+        m.alive = false;
+        m.ready = false;
+        m.failure = "sent no heartbeat for " + std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(now - m.last_heard).count()) +
+                    " ms (crashed, hung or stopped; pid " + std::to_string(m.pid) + ")";
+        spdlog::error("service '{}' {}", name, m.failure);
+        status_dirty = true;
+      }
     }
   }
 
@@ -375,7 +390,7 @@ struct Coordinator::Impl {
     barrier.Open(run, t.frame(), config.RequiredServices());
     tick_sent = now;
     tick_deadline = now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(settings.service_timeout()));
-    tick_writer.Write(open_tick);
+    Post(tick_writer, open_tick);
   }
 
   void ResendTick(Clock::time_point now) {
@@ -383,7 +398,7 @@ struct Coordinator::Impl {
     barrier.Open(run, open_tick.frame(), config.RequiredServices());
     tick_sent = now;
     tick_deadline = now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(settings.service_timeout()));
-    tick_writer.Write(open_tick);
+    Post(tick_writer, open_tick);
   }
 
   void CompleteTick(Clock::time_point now) {
@@ -395,7 +410,7 @@ struct Coordinator::Impl {
     d.sim_time(sim_time);
     d.world_hash(barrier.WorldHash());
     barrier.Close();
-    done_writer.Write(d);
+    Post(done_writer, d);
     barrier_us_sum += std::chrono::duration<double, std::micro>(now - tick_sent).count();
     ++barrier_count;
     recent_done.push_back(now);
@@ -417,13 +432,12 @@ Coordinator::Coordinator(Bus& bus, LaunchConfig config) : impl_(std::make_unique
   s.done_writer = Writer<msg::FrameDone>(bus, topics::kFrameDone);
   s.reply_writer = Writer<msg::CommandReply>(bus, topics::kCommandReply);
   {
-    std::lock_guard<std::mutex> lock(s.mu);
+    std::unique_lock<std::mutex> lock(s.mu);
     s.PublishWorld();
     s.PublishMap();
+    s.Flush(lock);
   }
-  s.ack_reader = Reader<msg::Ack>(
-      bus, topics::kAck, [&s](const msg::Ack& a, const SampleInfo& i) { s.OnAck(a, i); },
-      [&s](const LivelinessChange& c) { s.OnLiveliness(c); });
+  s.ack_reader = Reader<msg::Ack>(bus, topics::kAck, [&s](const msg::Ack& a, const SampleInfo&) { s.OnAck(a); });
   s.service_reader = Reader<msg::ServiceAnnounce>(bus, topics::kService,
                                                   [&s](const msg::ServiceAnnounce& a, const SampleInfo&) { s.OnAnnounce(a); });
   s.command_reader = Reader<msg::Command>(bus, topics::kCommand, [&s](const msg::Command& c, const SampleInfo&) { s.OnCommand(c); });
@@ -451,6 +465,7 @@ int Coordinator::Run(const std::atomic<bool>& stop) {
   while (!stop) {
     const auto now = Clock::now();
     s.HandleCommands();
+    s.CheckHeartbeats(now);
 
     std::string failed;
     const std::string why = s.CheckMembers(&failed);
@@ -471,14 +486,14 @@ int Coordinator::Run(const std::atomic<bool>& stop) {
     }
 
     const bool active = s.state == RunState::RUN_RUNNING || s.state == RunState::RUN_READY;
-    Clock::time_point wake = now + std::chrono::milliseconds(200);
+    Clock::time_point wake = now + std::chrono::milliseconds(100);
     if (active && s.barrier.open()) {
       if (s.barrier.Complete()) {
         s.CompleteTick(now);
         if (s.config.ticks > 0 && s.frame >= s.config.ticks && !s.settings.synchronous_mode()) {
           s.SetState(RunState::RUN_STOPPED);
           s.PublishStatus(now);
-          spdlog::info("finished {} ticks", s.frame);
+          s.Flush(lock);
           return 0;
         }
       } else if (now >= s.tick_deadline) {
@@ -494,6 +509,7 @@ int Coordinator::Run(const std::atomic<bool>& stop) {
         }
         spdlog::error("stopping the clock: {}", s.failure_reason);
         s.SetState(RunState::RUN_FAULTED);
+        s.Flush(lock);
         continue;
       } else {
         wake = std::min(wake, s.tick_deadline);
@@ -524,6 +540,7 @@ int Coordinator::Run(const std::atomic<bool>& stop) {
     }
 
     if (s.status_dirty || now - s.last_status > std::chrono::milliseconds(500)) s.PublishStatus(now);
+    s.Flush(lock);
     if (s.barrier.open() && s.barrier.Complete()) continue;
     s.cv.wait_until(lock, wake, [&] {
       return stop || !s.inbox.empty() || s.status_dirty || (s.barrier.open() && s.barrier.Complete());
@@ -531,6 +548,7 @@ int Coordinator::Run(const std::atomic<bool>& stop) {
   }
   s.SetState(RunState::RUN_STOPPED);
   s.PublishStatus(Clock::now());
+  s.Flush(lock);
   return 0;
 }
 

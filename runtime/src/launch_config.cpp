@@ -79,12 +79,8 @@ ServiceLaunch LoadService(YamlMap m) {
   m.Get("required", &s.required);
   m.Get("perception", &s.perception);
   m.Get("restart", &s.restart);
-  m.Get("step_delay_s", &s.step_delay_s);
   if (s.restart != "never" && s.restart != "on-failure") {
     m.Fail(m.Child("restart"), "restart", "must be 'never' or 'on-failure', got '" + s.restart + "'");
-  }
-  if (s.step_delay_s < 0 || !std::isfinite(s.step_delay_s)) {
-    m.Fail(m.Child("step_delay_s"), "step_delay_s", "must be >= 0");
   }
   m.Finish();
   return s;

@@ -24,7 +24,8 @@ struct ServiceRunner::Impl {
   ServiceCore& core;
 
   std::mutex mu;
-  std::condition_variable cv;
+  std::condition_variable cv;            // ticks and world info arrived
+  std::condition_variable heartbeat_cv;  // wakes the heartbeat thread to stop
   std::deque<msg::Tick> ticks;
   std::optional<msg::WorldInfo> world;
   std::optional<msg::ServiceSnapshot> snapshot;  // our own last snapshot, for a replacement
@@ -33,6 +34,7 @@ struct ServiceRunner::Impl {
   std::atomic<uint64_t> last_frame{0};
   uint64_t last_hash = 0;
   bool can_snapshot = true;
+  std::atomic<bool> joined{false};
 
   Writer<msg::Ack> ack;
   Writer<msg::ServiceAnnounce> announce;
@@ -126,6 +128,7 @@ struct ServiceRunner::Impl {
     // An ack before any tick tells the coordinator which writer is ours (liveliness).
     SendAck(last_frame, 0);
     Announce(msg::ServiceState::SERVICE_READY);
+    joined = true;
   }
 
   void Handle(const msg::Tick& tick, const std::atomic<bool>& stop) {
@@ -195,17 +198,17 @@ uint64_t ServiceRunner::last_frame() const { return impl_->last_frame; }
 
 void ServiceRunner::Run(const std::atomic<bool>& stop) {
   auto& s = *impl_;
-  // Liveliness comes from its own thread, so a long step is not mistaken for a hang
-  // (the coordinator's per-tick timeout covers that); a stopped or killed process
-  // stops asserting and is noticed within the 500 ms lease.
+  // Heartbeats come from their own thread, so a long step is not mistaken for a hang
+  // (the coordinator's per-tick timeout covers that); a killed or stopped process
+  // falls silent and is noticed within the coordinator's heartbeat timeout.
   std::atomic<bool> heartbeat_stop{false};
   std::thread heartbeat([&] {
     std::unique_lock<std::mutex> lock(s.mu);
     while (!heartbeat_stop && !stop) {
       lock.unlock();
-      s.ack.AssertLiveliness();
+      if (s.joined) s.Announce(msg::ServiceState::SERVICE_READY);
       lock.lock();
-      s.cv.wait_for(lock, std::chrono::duration<double>(s.options.liveliness_period_s));
+      s.heartbeat_cv.wait_for(lock, std::chrono::duration<double>(s.options.heartbeat_period_s));
     }
   });
   try {
@@ -223,12 +226,12 @@ void ServiceRunner::Run(const std::atomic<bool>& stop) {
     }
   } catch (...) {
     heartbeat_stop = true;
-    s.cv.notify_all();
+    s.heartbeat_cv.notify_all();
     heartbeat.join();
     throw;
   }
   heartbeat_stop = true;
-  s.cv.notify_all();
+  s.heartbeat_cv.notify_all();
   heartbeat.join();
 }
 

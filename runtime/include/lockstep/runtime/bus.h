@@ -13,7 +13,7 @@ namespace lockstep {
 // named "lockstep.<family>.writer" / ".reader" (docs/topics.md lists them).
 enum class QosKind {
   kClock,       // RELIABLE, KEEP_LAST 1, TRANSIENT_LOCAL: tick, world info, run status, map
-  kAck,         // RELIABLE, KEEP_LAST 1, VOLATILE, liveliness MANUAL_BY_TOPIC 500 ms
+  kAck,         // RELIABLE, KEEP_LAST 1 per service, VOLATILE
   kMembership,  // RELIABLE, KEEP_LAST 1, TRANSIENT_LOCAL: service announcements, snapshots
   kCommand,     // RELIABLE, KEEP_LAST 256, VOLATILE: commands and replies
   kState,       // RELIABLE, KEEP_LAST 4, TRANSIENT_LOCAL: ground / air state

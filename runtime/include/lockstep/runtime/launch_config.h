@@ -17,7 +17,6 @@ struct ServiceLaunch {
   bool required = true;             // the barrier waits for it
   bool perception = false;
   std::string restart = "never";    // never | on-failure (the launcher starts a replacement)
-  double step_delay_s = 0;          // noop only: simulated work per step
 };
 
 struct LaunchConfig {

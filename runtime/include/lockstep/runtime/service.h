@@ -17,7 +17,7 @@ struct ServiceOptions {
   std::string name;                  // unique in a run, e.g. "air_sim"
   std::string kind;                  // implementation, e.g. "air_sim"
   bool perception = false;           // render / sensors: read-only phase
-  double liveliness_period_s = 0.1;  // s, how often the ack writer asserts liveliness
+  double heartbeat_period_s = 0.1;   // s, how often the service re-announces itself (liveliness)
   double world_info_timeout_s = 30;  // s, how long to wait for the coordinator at start
 };
 

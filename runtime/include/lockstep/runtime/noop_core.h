@@ -1,0 +1,30 @@
+#pragma once
+// A service that simulates nothing: it folds every tick's commands into a hash chain.
+// Used by the barrier benchmark and the tests, where equal hashes across services
+// prove every service saw the same commands, in the same order, in the same frame.
+#include <cstdint>
+#include <vector>
+
+#include "lockstep/runtime/service.h"
+
+namespace lockstep {
+
+class NoopCore : public ServiceCore {
+ public:
+  void BeginRun(const msg::WorldInfo& world) override;
+  void Step(const msg::Tick& tick) override;
+  uint64_t StateHash() const override { return hash_; }
+  std::vector<uint8_t> SaveState() const override;
+  void RestoreState(const std::vector<uint8_t>& state) override;
+
+  uint64_t frames() const { return frames_; }
+
+ private:
+  uint64_t hash_ = 0;
+  uint64_t frames_ = 0;
+};
+
+// Hash of one command's identity (client, sequence number, kind).
+uint64_t CommandHash(const msg::Command& c);
+
+}  // namespace lockstep

@@ -1,0 +1,55 @@
+#include "lockstep/runtime/service_main.h"
+
+#include <CLI/CLI.hpp>
+
+#include <csignal>
+
+#include "lockstep/runtime/log.h"
+
+namespace lockstep {
+namespace {
+std::atomic<bool> g_stop{false};
+void OnSignal(int) { g_stop = true; }
+}  // namespace
+
+int RunServiceMain(int argc, char** argv, const std::string& kind, bool perception,
+                   const std::function<std::unique_ptr<ServiceCore>(ServiceContext&)>& make_core) {
+  CLI::App app{"Lockstep service: " + kind};
+  std::string name = kind;
+  std::string config_file;
+  int domain = -1;
+  std::string profile;
+  app.add_option("--name", name, "service name, unique in the run");
+  app.add_option("--config", config_file, "launch config (YAML)")->check(CLI::ExistingFile);
+  app.add_option("--domain", domain, "DDS domain id (overrides the config)");
+  app.add_option("--participant-profile", profile, "Fast DDS participant profile (overrides the config)");
+  CLI11_PARSE(app, argc, argv);
+  InitLogging(name);
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGTERM, OnSignal);
+  try {
+    ServiceContext ctx;
+    ctx.name = name;
+    if (!config_file.empty()) ctx.config = LoadLaunchConfig(config_file);
+    if (domain >= 0) ctx.config.domain_id = domain;
+    if (!profile.empty()) ctx.config.participant_profile = profile;
+    for (const auto& s : ctx.config.services) {
+      if (s.name == name) ctx.self = &s;
+    }
+    auto bus = CreateDdsBus({ctx.config.domain_id, ctx.config.qos_file, ctx.config.participant_profile, name});
+    ctx.bus = bus.get();
+    std::unique_ptr<ServiceCore> core = make_core(ctx);
+    {
+      ServiceRunner runner(*bus, ServiceOptions{name, kind, perception}, *core);
+      runner.Run(g_stop);
+      spdlog::info("stopping after frame {}", runner.last_frame());
+    }
+    core.reset();
+    return 0;
+  } catch (const std::exception& e) {
+    spdlog::error("{}", e.what());
+    return 2;
+  }
+}
+
+}  // namespace lockstep

@@ -8,6 +8,7 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <sstream>
 
 #include "lockstep/coordinator/command_processor.h"
@@ -117,6 +118,7 @@ struct Coordinator::Impl {
   double barrier_us_sum = 0;
   uint64_t barrier_count = 0;
   Clock::time_point last_status;
+  std::optional<Clock::time_point> first_tick;  // wall time the run's first tick went out
   bool status_dirty = true;
 
   Writer<msg::Tick> tick_writer;
@@ -379,6 +381,7 @@ struct Coordinator::Impl {
   }
 
   void StartTick(Clock::time_point now) {
+    if (!first_tick) first_tick = now;
     msg::Tick t;
     t.run(run);
     t.frame(frame + 1);
@@ -399,6 +402,13 @@ struct Coordinator::Impl {
     tick_sent = now;
     tick_deadline = now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(settings.service_timeout()));
     Post(tick_writer, open_tick);
+  }
+
+  void LogSummary(Clock::time_point now) const {
+    if (!first_tick || frame == 0) return;
+    const double wall = std::chrono::duration<double>(now - *first_tick).count();
+    spdlog::info("finished {} ticks in {:.3f} s wall: {:.1f} ticks/s, real-time factor {:.2f}, mean barrier {:.1f} us",
+                 frame, wall, frame / wall, sim_time / wall, barrier_count ? barrier_us_sum / barrier_count : 0.0);
   }
 
   void CompleteTick(Clock::time_point now) {
@@ -494,6 +504,7 @@ int Coordinator::Run(const std::atomic<bool>& stop) {
           s.SetState(RunState::RUN_STOPPED);
           s.PublishStatus(now);
           s.Flush(lock);
+          s.LogSummary(now);
           return 0;
         }
       } else if (now >= s.tick_deadline) {
@@ -549,6 +560,7 @@ int Coordinator::Run(const std::atomic<bool>& stop) {
   s.SetState(RunState::RUN_STOPPED);
   s.PublishStatus(Clock::now());
   s.Flush(lock);
+  s.LogSummary(Clock::now());
   return 0;
 }
 

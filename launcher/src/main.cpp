@@ -1,0 +1,152 @@
+// lockstep: the command-line front end.
+//   lockstep up <config.yaml>     start the coordinator and services of a simulation
+//   lockstep status               members, frame and tick rate of a running simulation
+//   lockstep map info <file>      statistics of an OpenDRIVE map (delegates to lockstep-map)
+#include <CLI/CLI.hpp>
+#include <unistd.h>
+
+#include <chrono>
+#include <condition_variable>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <mutex>
+#include <optional>
+
+#include "lockstep/runtime/error.h"
+#include "lockstep/runtime/launch_config.h"
+#include "lockstep/runtime/log.h"
+#include "supervisor.h"
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+void OnSignal(int) { g_stop = true; }
+
+std::string BinDir() { return std::filesystem::canonical("/proc/self/exe").parent_path().string(); }
+
+int Up(const std::string& config_file, int domain) {
+  lockstep::LaunchConfig config = lockstep::LoadLaunchConfig(config_file);
+  if (domain >= 0) config.domain_id = domain;
+  const std::string bin = BinDir();
+  const std::string dom = std::to_string(config.domain_id);
+  std::vector<lockstep::ChildSpec> children;
+  children.push_back({"coordinator", {bin + "/lockstep_coordinator", config_file, "--domain", dom}, false, true});
+  for (const auto& s : config.services) {
+    std::string exe = s.executable.empty() ? bin + "/lockstep_" + s.kind : s.executable;
+    if (exe.find('/') == std::string::npos) exe = bin + "/" + exe;
+    if (!std::filesystem::exists(exe)) {
+      throw lockstep::InputError(config_file + ": service '" + s.name + "' of kind '" + s.kind + "': no program " + exe);
+    }
+    std::vector<std::string> argv{exe, "--name", s.name, "--config", config_file, "--domain", dom};
+    argv.insert(argv.end(), s.args.begin(), s.args.end());
+    children.push_back({s.name, argv, s.restart == "on-failure", false});
+  }
+  std::printf("lockstep: starting '%s' on DDS domain %d: coordinator + %zu service(s)\n", config.name.c_str(),
+              config.domain_id, config.services.size());
+  std::fflush(stdout);
+  lockstep::Supervisor supervisor(std::move(children));
+  return supervisor.Run(g_stop);
+}
+
+const char* StateName(lockstep::msg::RunState s) {
+  using lockstep::msg::RunState;
+  switch (s) {
+    case RunState::RUN_WAITING_FOR_SERVICES: return "waiting for services";
+    case RunState::RUN_READY: return "ready";
+    case RunState::RUN_RUNNING: return "running";
+    case RunState::RUN_FAULTED: return "faulted";
+    case RunState::RUN_STOPPED: return "stopped";
+  }
+  return "?";
+}
+
+int Status(int domain, const std::string& profile, double wait_s, bool json) {
+  auto bus = lockstep::CreateDdsBus({domain, "", profile, "lockstep-status"});
+  std::mutex mu;
+  std::condition_variable cv;
+  std::optional<lockstep::msg::RunStatus> status;
+  lockstep::Reader<lockstep::msg::RunStatus> reader(*bus, lockstep::topics::kRunStatus,
+                                                     [&](const lockstep::msg::RunStatus& s, const lockstep::SampleInfo&) {
+                                                       std::lock_guard<std::mutex> lock(mu);
+                                                       status = s;
+                                                       cv.notify_all();
+                                                     });
+  std::unique_lock<std::mutex> lock(mu);
+  if (!cv.wait_for(lock, std::chrono::duration<double>(wait_s), [&] { return status.has_value(); })) {
+    std::fprintf(stderr, "lockstep status: no simulation answered on DDS domain %d within %.1f s\n", domain, wait_s);
+    return 1;
+  }
+  const auto& s = *status;
+  if (json) {
+    std::printf("{\"run\":%u,\"state\":\"%s\",\"frame\":%llu,\"sim_time\":%.6f,\"tick_rate_hz\":%.2f,\"real_time_factor\":%.3f,\"members\":[",
+                s.run(), StateName(s.state()), static_cast<unsigned long long>(s.frame()), s.sim_time(), s.tick_rate_hz(),
+                s.real_time_factor());
+    for (size_t i = 0; i < s.members().size(); ++i) {
+      const auto& m = s.members()[i];
+      std::printf("%s{\"service\":\"%s\",\"kind\":\"%s\",\"alive\":%s,\"required\":%s,\"last_frame\":%llu,\"step_us\":%.1f}",
+                  i ? "," : "", m.service().c_str(), m.kind().c_str(), m.alive() ? "true" : "false",
+                  m.required() ? "true" : "false", static_cast<unsigned long long>(m.last_frame()), m.last_step_wall_us());
+    }
+    std::printf("],\"failed_service\":\"%s\",\"reason\":\"%s\"}\n", s.failed_service().c_str(), s.reason().c_str());
+    return 0;
+  }
+  std::printf("run %u: %s, frame %llu, sim time %.2f s, %.1f ticks/s (real-time factor %.2f)\n", s.run(), StateName(s.state()),
+              static_cast<unsigned long long>(s.frame()), s.sim_time(), s.tick_rate_hz(), s.real_time_factor());
+  if (s.failed_service().size() > 0) std::printf("failed: %s: %s\n", s.failed_service().c_str(), s.reason().c_str());
+  std::printf("%-20s %-14s %-6s %-9s %-12s %s\n", "SERVICE", "KIND", "ALIVE", "REQUIRED", "LAST FRAME", "STEP (us)");
+  for (const auto& m : s.members()) {
+    std::printf("%-20s %-14s %-6s %-9s %-12llu %.1f\n", m.service().c_str(), m.kind().c_str(), m.alive() ? "yes" : "NO",
+                m.required() ? "yes" : "no", static_cast<unsigned long long>(m.last_frame()), m.last_step_wall_us());
+  }
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Lockstep: a lock-step urban driving and drone co-simulator"};
+  app.require_subcommand(1);
+
+  auto* up = app.add_subcommand("up", "start a simulation from a launch config");
+  std::string config_file;
+  int domain = -1;
+  up->add_option("config", config_file, "launch config (YAML)")->required()->check(CLI::ExistingFile);
+  up->add_option("--domain", domain, "DDS domain id (overrides the config)");
+
+  auto* status = app.add_subcommand("status", "show a running simulation");
+  int status_domain = 0;
+  double wait_s = 3;
+  bool json = false;
+  std::string profile = "lockstep.participant";
+  status->add_option("--domain", status_domain, "DDS domain id");
+  status->add_option("--wait", wait_s, "seconds to wait for an answer");
+  status->add_option("--participant-profile", profile, "Fast DDS participant profile");
+  status->add_flag("--json", json, "one JSON object");
+
+  auto* map = app.add_subcommand("map", "map tools (see lockstep-map --help)");
+  map->prefix_command();
+
+  CLI11_PARSE(app, argc, argv);
+  lockstep::InitLogging("lockstep");
+  std::signal(SIGINT, OnSignal);
+  std::signal(SIGTERM, OnSignal);
+  try {
+    if (*up) return Up(config_file, domain);
+    if (*status) return Status(status_domain, profile, wait_s, json);
+    if (*map) {
+      const std::string tool = BinDir() + "/lockstep-map";
+      std::vector<std::string> rest = map->remaining();
+      std::vector<char*> args{const_cast<char*>(tool.c_str())};
+      for (auto& r : rest) args.push_back(r.data());
+      args.push_back(nullptr);
+      execv(tool.c_str(), args.data());
+      std::fprintf(stderr, "lockstep map: cannot run %s\n", tool.c_str());
+      return 127;
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "lockstep: %s\n", e.what());
+    return 2;
+  }
+  return 0;
+}

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "sim_fixture.h"
 
@@ -54,6 +55,7 @@ TEST(air_contact, BounceRestitution) {
   }
   ASSERT_TRUE(hit);
   EXPECT_NEAR(v_in, std::sqrt(2 * sim.model.gravity * 1.0), 0.05);
+  std::printf("bounce: in %.3f m/s out %.3f m/s ratio %.3f\n", v_in, v_out, v_out / v_in);
   EXPECT_NEAR(v_out / v_in, 0.55, 0.03);
   const AirEvent* first = nullptr;
   for (const AirEvent& ev : sim.all_events) {
@@ -195,6 +197,7 @@ TEST(air_contact, LandsOnMovingCarAndIsCarried) {
     }
   }
   ASSERT_TRUE(touched) << "never landed on the car";
+  std::printf("touchdown error %.3f m at t = %.2f s\n", touchdown_err.head<2>().norm(), sim.state.time);
   EXPECT_LT(touchdown_err.head<2>().norm(), 0.5) << touchdown_err.transpose();
   EXPECT_GT(sim.state.time, 5.0);
   EXPECT_EQ(sim.D(1).collision.object_id, 42u);
@@ -205,6 +208,7 @@ TEST(air_contact, LandsOnMovingCarAndIsCarried) {
   for (int i = 0; i < 40; ++i) tick(0);
   for (int i = 0; i < 40; ++i) tick(1.0);
   const Vec3 rel1 = sim.D(1).position - sim.env.vehicles[0].pose.position;
+  std::printf("slip on the roof while carried: %.3f m\n", (rel1 - rel0).head<2>().norm());
   EXPECT_LT((rel1 - rel0).head<2>().norm(), 0.3) << (rel1 - rel0).transpose();
   EXPECT_NEAR(rel1.z(), car.half_extents.z() + RestHeight(sim.model.drones[0].derived), 0.02);
   EXPECT_NEAR(sim.D(1).velocity.x(), sim.env.vehicles[0].velocity.x(), 0.2);

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 
 #include "sim_fixture.h"
@@ -79,6 +80,7 @@ TEST(air_controller, TakeoffSettlesAtTwoMetres) {
     if (err < 0.1 && settled_at < 0) settled_at = sim.state.time;
     if (err >= 0.1) settled_at = -1;
   }
+  std::printf("takeoff: settled within 0.1 m at %.2f s, peak %.3f m\n", settled_at, max_z);
   EXPECT_GT(settled_at, 0);
   EXPECT_LT(settled_at, 5.0);
   EXPECT_LT(max_z, 2.1);
@@ -106,6 +108,7 @@ TEST(air_controller, MoveToPositionTenMetres) {
   EXPECT_EQ(sim.Status(m), CommandStatus::kCompleted);
   sim.Run(2.0);
   overshoot = std::max(overshoot, (sim.D(1).position - goal).dot(dir));
+  std::printf("move 10 m: final error %.3f m, overshoot %.3f m\n", (sim.D(1).position - goal).norm(), overshoot);
   EXPECT_LT((sim.D(1).position - goal).norm(), 0.5);
   EXPECT_LT(overshoot, 1.0);
   EXPECT_LT(std::abs(sim.D(1).position.z() - goal.z()), 0.3);
@@ -120,6 +123,7 @@ TEST(air_controller, YawStepSettles) {
   EXPECT_EQ(sim.Status(r), CommandStatus::kCompleted);
   sim.Run(2.0);
   const double err = WrapAngle(YawOf(sim.D(1).orientation) - kPi / 2);
+  std::printf("yaw step 90 deg: done at %.2f s, error %.3f deg\n", sim.last_report[r].time, err * 180 / kPi);
   EXPECT_LT(std::abs(err), 2 * kPi / 180);
   // And back the other way, across the +-pi seam.
   const CommandId r2 = sim.Send(1, cmd::RotateToYaw{-3.0, 10.0, 0.02});
@@ -231,6 +235,7 @@ TEST(air_controller, PathGoHomeAndLand) {
       },
       30));
   EXPECT_EQ(sim.Status(p), CommandStatus::kCompleted);
+  std::printf("path: max deviation %.3f m\n", max_dev);
   EXPECT_LT(max_dev, 1.0);
   EXPECT_LT((sim.D(1).position - (s + Vec3(0, 5, 1))).norm(), 0.3);
   const CommandId h = sim.Send(1, cmd::GoHome{});

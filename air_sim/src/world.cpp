@@ -194,7 +194,7 @@ std::string ValidateBody(const DroneModel& dm, const DroneState& ds, const Comma
 }
 
 bool NeedsArmed(const CommandBody& b) {
-  return IsMotionCommand(b) && !std::holds_alternative<cmd::Hover>(b) && !std::holds_alternative<cmd::SetPose>(b);
+  return IsMotionCommand(b) && !std::holds_alternative<cmd::SetPose>(b);
 }
 
 // ----------------------------------------------------------------- command bookkeeping
@@ -772,6 +772,20 @@ AirSimKinematics ToAirSim(const DroneModel& model, const DroneState& s) {
   k.angular_velocity = FluToFrd(s.angular_velocity);
   k.linear_acceleration = EnuToNed(s.acceleration);
   return k;
+}
+
+AirSimCollisionInfo ToAirSim(const DroneModel& model, const CollisionInfo& c) {
+  AirSimCollisionInfo a;
+  a.has_collided = c.has_collided;
+  a.normal = EnuToNed(c.normal);
+  a.impact_point = WorldToAirSimPosition(c.impact_point, model.spawn.position);
+  a.position = WorldToAirSimPosition(c.position, model.spawn.position);
+  a.penetration_depth = c.penetration_depth;
+  a.time_stamp_ns = static_cast<std::uint64_t>(std::llround(c.time * 1e9));
+  a.object_name = std::string(ToString(c.kind)) + (c.kind == ObjectKind::kGround ? "" : "_" + std::to_string(c.object_id));
+  a.object_id = c.kind == ObjectKind::kNone ? -1 : static_cast<std::int64_t>(c.object_id);
+  a.collision_count = c.collision_count;
+  return a;
 }
 
 std::uint64_t StateHash(const WorldState& state) {

@@ -22,6 +22,16 @@ struct Sim {
   std::map<CommandId, CommandReport> last_report;
   std::vector<CommandReport> all_reports;
   std::vector<AirEvent> all_events;
+  bool allow_resets = false;  // MuJoCo-style: any non-finite reset fails the test unless allowed
+
+  ~Sim() {
+    if (allow_resets) return;
+    for (const AirEvent& e : all_events) {
+      if (e.kind == EventKind::kReset) {
+        ADD_FAILURE_AT(__FILE__, __LINE__) << "unexpected reset event of drone " << e.drone << ": " << e.message;
+      }
+    }
+  }
 
   DroneId Add(DroneId id, const MultirotorParams& p = {}, Vec3 xy = Vec3::Zero(), double yaw = 0) {
     const DerivedParams d = DeriveParams(p);

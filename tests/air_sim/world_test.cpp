@@ -66,6 +66,7 @@ TEST(air_world, SameSeedAndCommandsGiveIdenticalTrajectories) {
 
 TEST(air_world, NonFiniteStateResetsDroneAndRaisesEvent) {
   Sim sim;
+  sim.allow_resets = true;
   sim.Add(1);
   sim.Add(2, {}, Vec3(4, 0, 0));
   sim.TakeOff(1);
@@ -110,6 +111,8 @@ TEST(air_world, BadCommandsAreRejectedWithReasons) {
   const double inf = std::numeric_limits<double>::infinity();
   EXPECT_NE(Rejection(sim, 99, cmd::Arm{}).find("unknown drone id"), std::string::npos);
   EXPECT_NE(Rejection(sim, 1, cmd::Takeoff{}).find("disarmed"), std::string::npos);
+  EXPECT_NE(Rejection(sim, 1, cmd::Hover{}).find("disarmed"), std::string::npos);
+  EXPECT_NE(Rejection(sim, 1, cmd::MoveByVelocity{Vec3(1, 0, 0), 1.0}).find("disarmed"), std::string::npos);
   sim.Send(1, cmd::Arm{});
   sim.Tick();
   EXPECT_NE(Rejection(sim, 1, cmd::MoveByVelocity{Vec3(nan, 0, 0), 1.0}).find("velocity is not finite"), std::string::npos);

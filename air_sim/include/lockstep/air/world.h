@@ -198,6 +198,18 @@ struct AirSimKinematics {
   Vec3 linear_acceleration; // m/s^2, NED
 };
 AirSimKinematics ToAirSim(const DroneModel& model, const DroneState& s);
+struct AirSimCollisionInfo {     // AirSim's CollisionInfo fields
+  bool has_collided = false;
+  Vec3 normal = Vec3::Zero();        // NED
+  Vec3 impact_point = Vec3::Zero();  // m, NED from spawn
+  Vec3 position = Vec3::Zero();      // m, NED from spawn
+  double penetration_depth = 0;      // m
+  std::uint64_t time_stamp_ns = 0;   // sim time, ns
+  std::string object_name;           // "ground", "static_<mesh id>", "vehicle_<actor id>"
+  std::int64_t object_id = -1;
+  std::uint64_t collision_count = 0;
+};
+AirSimCollisionInfo ToAirSim(const DroneModel& model, const CollisionInfo& c);
 
 // Order-sensitive FNV-1a hash of every drone's pose, velocity and rotor signals (bitwise).
 std::uint64_t StateHash(const WorldState& state);

@@ -24,13 +24,14 @@ struct ServiceRunner::Impl {
   ServiceCore& core;
 
   std::mutex mu;
+  std::mutex step_mu;                    // one step at a time, whichever thread runs it
   std::condition_variable cv;            // ticks and world info arrived
   std::condition_variable heartbeat_cv;  // wakes the heartbeat thread to stop
   std::deque<msg::Tick> ticks;
   std::optional<msg::WorldInfo> world;
   std::optional<msg::ServiceSnapshot> snapshot;  // our own last snapshot, for a replacement
 
-  uint32_t run = 0;
+  std::atomic<uint32_t> run{0};
   std::atomic<uint64_t> last_frame{0};
   uint64_t last_hash = 0;
   bool can_snapshot = true;
@@ -178,6 +179,21 @@ ServiceRunner::ServiceRunner(Bus& bus, ServiceOptions options, ServiceCore& core
     s.cv.notify_all();
   });
   s.tick_reader = Reader<msg::Tick>(bus, topics::kTick, [&s](const msg::Tick& t, const SampleInfo&) {
+    // Fast path: step right here when the core never waits and nothing is queued
+    // before this tick (a new run needs world info: the main thread waits for it).
+    if (s.joined && s.core.StepNeverWaits() && t.run() == s.run) {
+      std::lock_guard<std::mutex> step(s.step_mu);
+      bool queued;
+      {
+        std::lock_guard<std::mutex> lock(s.mu);
+        queued = !s.ticks.empty();
+      }
+      if (!queued) {
+        static const std::atomic<bool> never_stop{false};
+        s.Handle(t, never_stop);
+        return;
+      }
+    }
     {
       std::lock_guard<std::mutex> lock(s.mu);
       s.ticks.push_back(t);
@@ -222,6 +238,7 @@ void ServiceRunner::Run(const std::atomic<bool>& stop) {
         tick = std::move(s.ticks.front());
         s.ticks.pop_front();
       }
+      std::lock_guard<std::mutex> step(s.step_mu);
       s.Handle(*tick, stop);
     }
   } catch (...) {

@@ -7,6 +7,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "lockstep/runtime/bus.h"
 #include "lockstep/runtime/launch_config.h"
@@ -17,6 +18,7 @@ struct CoordinatorStats {
   uint64_t frames = 0;          // frames completed in the current run
   double tick_rate_hz = 0;      // recent completed ticks per wall second
   double mean_barrier_us = 0;   // mean wall time from publishing a tick to its last ack
+  std::vector<double> barrier_us;  // per completed tick (at most the last 100000)
 };
 
 class Coordinator {

@@ -16,6 +16,7 @@ class NoopCore : public ServiceCore {
   uint64_t StateHash() const override { return hash_; }
   std::vector<uint8_t> SaveState() const override;
   void RestoreState(const std::vector<uint8_t>& state) override;
+  bool StepNeverWaits() const override { return true; }
 
   uint64_t frames() const { return frames_; }
 

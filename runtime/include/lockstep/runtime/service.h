@@ -35,6 +35,10 @@ class ServiceCore {
   // Full state for a replacement process. Empty: the service cannot be restored and a
   // replacement starts from BeginRun at the current frame.
   virtual std::vector<uint8_t> SaveState() const { return {}; }
+  // True if Step never waits for other topics: the runner may then step on the DDS
+  // receive thread, saving a thread hand-off per tick. A core that waits for inputs
+  // (perception in strict mode) must return false, or it would block their delivery.
+  virtual bool StepNeverWaits() const { return false; }
   virtual void RestoreState(const std::vector<uint8_t>& /*state*/) {}
 };
 

@@ -250,6 +250,7 @@ void SetupPath(ActiveCommand& ac, const Vec3& start, const std::vector<Vec3>& pt
   }
   ac.s = 0;
   ac.s_dot = 0;
+  ac.segment = 1;
   ac.speed = speed;
   ac.lookahead = lookahead > 0 ? lookahead : std::max(1.0, speed);
   ac.adaptive_lookahead = adaptive;
@@ -263,8 +264,9 @@ void PathAt(const ActiveCommand& ac, double s, Vec3* point, Vec3* tangent) {
     tangent->setZero();
     return;
   }
-  std::size_t i = 1;
-  while (i + 1 < n && ac.path_s[i] < s) ++i;
+  // Segment i containing s: path_s[i - 1] < s <= path_s[i] (binary search).
+  const std::size_t i = static_cast<std::size_t>(
+      std::lower_bound(ac.path_s.begin() + 1, ac.path_s.end() - 1, s) - ac.path_s.begin());
   const double seg = ac.path_s[i] - ac.path_s[i - 1];
   const double u = std::clamp((s - ac.path_s[i - 1]) / seg, 0.0, 1.0);
   *tangent = (ac.path[i] - ac.path[i - 1]) / seg;
@@ -474,7 +476,8 @@ ControlGoal UpdateCommand(Ctx& c, double t, double h) {
       if (ac.adaptive_lookahead > 0) la = std::max(la, ac.adaptive_lookahead * ds.velocity.norm());
       const double lag = (ds.position - ref).norm();
       double sdot_des = std::min(ac.speed, std::sqrt(2.0 * p.path_accel * std::max(remaining, 0.0)));
-      for (std::size_t i = 1; i < ac.path.size(); ++i) {  // slow down for the corners ahead
+      while (ac.segment < ac.path.size() && ac.path_s[ac.segment] <= ac.s + 1e-9) ++ac.segment;
+      for (std::size_t i = ac.segment; i < ac.path.size(); ++i) {  // slow down for the corners ahead
         const double dist = ac.path_s[i] - ac.s;
         if (dist <= 1e-9) continue;
         const double v2 = ac.path_vmax[i] * ac.path_vmax[i] + 2.0 * p.path_accel * dist;

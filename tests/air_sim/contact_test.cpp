@@ -240,3 +240,52 @@ TEST(air_contact, CarHitsHoveringDrone) {
 
 }  // namespace
 }  // namespace lockstep::air
+
+namespace lockstep::air {
+namespace {
+
+TEST(air_contact, RidesATurningCar) {
+  // Drone placed on the roof (motors off) of a car that accelerates and then turns at
+  // 0.25 rad/s at 4 m/s (1 m/s^2 lateral, below mu g): friction keeps it on its spot.
+  Sim sim;
+  sim.Add(1);
+  VehicleBox car;
+  car.id = 5;
+  car.half_extents = Vec3(2.4, 1.0, 0.75);
+  car.pose.position = Vec3(0, 0, 0.75);
+  sim.env.vehicles = {car};
+  const double rest = RestHeight(sim.model.drones[0].derived);
+  Pose on_roof;
+  on_roof.position = Vec3(0.5, 0.2, 1.5 + rest);
+  sim.Send(1, cmd::SetPose{on_roof});
+  sim.Tick();
+  double yaw = 0, speed = 0;
+  auto car_frame = [&] {
+    const VehicleBox& c = sim.env.vehicles[0];
+    return Vec3(c.pose.orientation.conjugate() * (sim.D(1).position - c.pose.position));
+  };
+  const Vec3 start = car_frame();
+  for (int i = 0; i < 200; ++i) {
+    const double accel = i < 80 ? 1.0 : 0.0;  // m/s^2, for 4 s
+    const double yaw_rate = i >= 80 ? 0.25 : 0.0;
+    VehicleBox& c = sim.env.vehicles[0];
+    c.velocity = speed * Vec3(std::cos(yaw), std::sin(yaw), 0);
+    c.angular_velocity = Vec3(0, 0, yaw_rate);
+    sim.Tick();
+    c.pose.position += c.velocity * sim.dt;
+    yaw += yaw_rate * sim.dt;
+    c.pose.orientation = FromEuler(0, 0, yaw);
+    speed += accel * sim.dt;
+  }
+  const Vec3 end = car_frame();
+  std::printf("turning car: speed %.2f m/s, yaw %.2f rad, slip %.3f m\n", speed, yaw, (end - start).head<2>().norm());
+  EXPECT_GT(speed, 3.9);
+  EXPECT_GT(yaw, 1.4);
+  EXPECT_LT((end - start).head<2>().norm(), 0.3) << (end - start).transpose();
+  EXPECT_NEAR(end.z(), 0.75 + rest, 0.02);
+  EXPECT_EQ(sim.D(1).landed, LandedState::kLanded);
+  EXPECT_EQ(sim.D(1).collision.kind, ObjectKind::kVehicle);
+}
+
+}  // namespace
+}  // namespace lockstep::air

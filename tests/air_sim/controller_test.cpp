@@ -282,3 +282,43 @@ TEST(air_controller, TimeoutAndCancellation) {
 
 }  // namespace
 }  // namespace lockstep::air
+
+namespace lockstep::air {
+namespace {
+
+TEST(air_controller, LongPathAndForwardOnlyHeading) {
+  // A 2,000-point polyline (a gentle arc) followed nose-first.
+  Sim sim;
+  sim.Add(1);
+  sim.TakeOff(1);
+  const Vec3 c = sim.D(1).position;
+  cmd::MoveOnPath p;
+  for (int i = 1; i <= 2000; ++i) {
+    const double a = 0.5 * kPi * i / 2000.0;
+    p.path.push_back(c + Vec3(10 * std::sin(a), 10 - 10 * std::cos(a), 0));
+  }
+  p.velocity = 3;
+  p.drivetrain = Drivetrain::kForwardOnly;
+  p.yaw_mode = YawMode{false, 0};
+  const CommandId id = sim.Send(1, p);
+  double max_heading_err = 0;
+  int samples = 0;
+  ASSERT_TRUE(sim.RunUntil(
+      [&] {
+        const DroneState& d = sim.D(1);
+        if (d.velocity.head<2>().norm() > 2.0) {  // cruising: nose along the velocity
+          const double course = std::atan2(d.velocity.y(), d.velocity.x());
+          max_heading_err = std::max(max_heading_err, std::abs(WrapAngle(YawOf(d.orientation) - course)));
+          ++samples;
+        }
+        return sim.Done(id);
+      },
+      20));
+  EXPECT_EQ(sim.Status(id), CommandStatus::kCompleted);
+  EXPECT_GT(samples, 20);
+  EXPECT_LT(max_heading_err, 0.35);
+  EXPECT_LT((sim.D(1).position - p.path.back()).norm(), 0.3);
+}
+
+}  // namespace
+}  // namespace lockstep::air

@@ -98,6 +98,7 @@ struct ActiveCommand {
   std::vector<double> path_vmax; // m/s, speed allowed at each vertex (corners, end)
   double s = 0;                  // m, reference progress
   double s_dot = 0;              // m/s
+  std::size_t segment = 1;       // index of the first vertex ahead of s
   double speed = 0;              // m/s, cruise
   double lookahead = 0;          // m
   double adaptive_lookahead = 0; // s

@@ -22,10 +22,10 @@ Pose ExtrapolateVehicle(const VehicleBox& v, double t) {
   p.position = v.pose.position + v.velocity * t;
   const double w = v.angular_velocity.norm();
   if (w * t > 1e-12) {
-    p.orientation = Quat(Eigen::AngleAxisd(w * t, v.angular_velocity / w)) * v.pose.orientation;
+    p.orientation = Quat(Eigen::AngleAxisd(w * t, v.angular_velocity / w)) * v.pose.orientation.normalized();
     p.orientation.normalize();
   } else {
-    p.orientation = v.pose.orientation;
+    p.orientation = v.pose.orientation.normalized();
   }
   return p;
 }
@@ -162,7 +162,7 @@ std::shared_ptr<const StaticMesh> StaticMesh::Build(std::span<const float> xyz,
 }
 
 int StaticMesh::QuerySphere(const Vec3& center, double radius, ContactPoint* out, int max_out) const {
-  if (tris_.empty() || max_out <= 0) return 0;
+  if (tris_.empty() || max_out <= 0 || !center.allFinite() || !std::isfinite(radius)) return 0;
   const Vec3 slo = center.array() - radius, shi = center.array() + radius;
   if ((shi.array() < lo_.array()).any() || (slo.array() > hi_.array()).any()) return 0;
   const int x0 = std::clamp(static_cast<int>((slo.x() - lo_.x()) / cell_), 0, nx_ - 1);
@@ -218,7 +218,7 @@ int StaticMesh::QuerySphere(const Vec3& center, double radius, ContactPoint* out
 }
 
 double StaticMesh::HeightBelow(const Vec3& p, double max_drop) const {
-  if (tris_.empty()) return -1;
+  if (tris_.empty() || !p.allFinite()) return -1;
   if (p.x() < lo_.x() || p.x() > hi_.x() || p.y() < lo_.y() || p.y() > hi_.y()) return -1;
   const int x = std::clamp(static_cast<int>((p.x() - lo_.x()) / cell_), 0, nx_ - 1);
   const int y = std::clamp(static_cast<int>((p.y() - lo_.y()) / cell_), 0, ny_ - 1);

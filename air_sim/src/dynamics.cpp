@@ -177,7 +177,9 @@ void PhysicsSubstep(const World& model, const DroneModel& dm, DroneState* s, con
   auto add = [&](const ContactPoint& cp) {
     if (nc < kMaxContacts) contacts[nc++].cp = cp;
   };
+  const bool finite_pose = s->position.allFinite() && rot.allFinite();
   for (const ContactSphere& sp : d.spheres) {
+    if (!finite_pose) break;  // reset below; no queries with NaN
     const Vec3 c = s->position + rot * sp.center;
     if (sg.has_ground) {
       const double depth = sg.ground_height - (c.z() - sp.radius);
@@ -198,6 +200,13 @@ void PhysicsSubstep(const World& model, const DroneModel& dm, DroneState* s, con
     }
   }
   for (const VehicleBox& vb : env.vehicles) {
+    // Malformed vehicles (non-finite, empty) are ignored rather than poisoning the drone.
+    if (!finite_pose || !vb.pose.position.allFinite() || !vb.velocity.allFinite() ||
+        !vb.angular_velocity.allFinite() || !vb.pose.orientation.coeffs().allFinite() ||
+        !(vb.half_extents.minCoeff() > 0) || !vb.half_extents.allFinite() ||
+        vb.pose.orientation.norm() < 1e-6) {
+      continue;
+    }
     const Vec3 center = vb.pose.position + vb.velocity * t_obj;
     const double reach = vb.half_extents.norm() + d.bounding_radius;
     if ((center - s->position).squaredNorm() > reach * reach) continue;

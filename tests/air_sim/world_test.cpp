@@ -143,6 +143,46 @@ TEST(air_world, BadCommandsAreRejectedWithReasons) {
   EXPECT_THROW(Step(sim.model, &sim.state, {}, sim.env, nan), std::invalid_argument);
 }
 
+TEST(air_world, MalformedVehiclesAreIgnored) {
+  Sim sim;
+  sim.Add(1);
+  sim.TakeOff(1);
+  VehicleBox nan_car;
+  nan_car.id = 1;
+  nan_car.pose.position = Vec3(std::numeric_limits<double>::quiet_NaN(), 0, 0);
+  VehicleBox flat;
+  flat.id = 2;
+  flat.pose.position = sim.D(1).position;  // would contain the drone, but has no extent
+  flat.half_extents = Vec3(1, 1, 0);
+  VehicleBox wall;  // a real one the drone touches
+  wall.id = 3;
+  wall.pose.position = sim.D(1).position + Vec3(0.5, 0, 0);
+  wall.half_extents = Vec3(0.3, 2, 2);
+  sim.env.vehicles = {nan_car, flat, wall};
+  sim.Run(1.0);
+  EXPECT_TRUE(sim.D(1).position.allFinite());
+  EXPECT_EQ(sim.D(1).reset_count, 0u);
+  EXPECT_EQ(sim.D(1).collision.kind, ObjectKind::kVehicle);
+  EXPECT_EQ(sim.D(1).collision.object_id, 3u);
+}
+
+TEST(air_world, AirSimViewOfAFlyingDrone) {
+  Sim sim;
+  sim.Add(1, {}, Vec3(10, 20, 0));
+  sim.TakeOff(1);
+  sim.Send(1, cmd::MoveByVelocity{Vec3(0, 2, 0), 3.0});  // north
+  sim.Run(2.5);
+  const AirSimKinematics k = ToAirSim(sim.model.drones[0], sim.D(1));
+  EXPECT_NEAR(k.linear_velocity.x(), 2.0, 0.2);   // NED x = north
+  EXPECT_NEAR(k.linear_velocity.y(), 0.0, 0.2);
+  EXPECT_NEAR(k.position.z(), -2.0, 0.2);         // 2 m up = -2 NED
+  EXPECT_GT(k.position.x(), 2.0);
+  const AirSimCollisionInfo c = ToAirSim(sim.model.drones[0], sim.D(1).collision);
+  EXPECT_TRUE(c.has_collided);                    // the ground, before take-off
+  EXPECT_EQ(c.object_name, "ground");
+  EXPECT_NEAR(c.normal.z(), -1.0, 1e-12);          // up = -z NED
+}
+
 TEST(air_world, AddRemoveAndBadParams) {
   World model;
   WorldState state;

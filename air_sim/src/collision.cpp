@@ -13,6 +13,7 @@ const char* ToString(ObjectKind k) {
     case ObjectKind::kGround: return "ground";
     case ObjectKind::kStatic: return "static";
     case ObjectKind::kVehicle: return "vehicle";
+    case ObjectKind::kDrone: return "drone";
   }
   return "?";
 }

@@ -42,6 +42,7 @@ struct Contact {
   double target_vn = 0;
   double lambda_n = 0, lambda_t1 = 0, lambda_t2 = 0;
   double approach = 0;  // m/s, approach speed before the solve
+  double share = 1;     // fraction of the contact this drone resolves (1 for static objects)
 };
 
 bool Finite(const DroneState& s) {
@@ -106,8 +107,66 @@ void ResetToSpawn(const DroneModel& dm, DroneState* s) {
   s->controller.yaw_ref = YawOf(s->orientation);
 }
 
+void BuildProximity(const World& model, WorldState* state, double dt) {
+  WorldState::Proximity& px = state->proximity;
+  const std::size_t n = model.drones.size();
+  px.pose.resize(n);
+  px.velocity.resize(n);
+  px.reach.resize(n);
+  px.order.resize(n);
+  px.start.assign(n + 1, 0);
+  px.count.assign(n, 0);
+  px.others.clear();
+  if (!model.drone_collisions || n < 2) return;
+  double max_reach = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const DroneState& d = state->drones[i];
+    px.pose[i] = Pose{d.position, d.orientation};
+    px.velocity[i] = d.velocity;
+    const bool ok = d.position.allFinite() && d.velocity.allFinite() && d.orientation.coeffs().allFinite();
+    // Its own travel in the tick plus a margin for acceleration (10 m/s^2 over the tick).
+    px.reach[i] = ok ? model.drones[i].derived.bounding_radius + d.velocity.norm() * dt + 5.0 * dt * dt + 0.01 : -1;
+    max_reach = std::max(max_reach, px.reach[i]);
+    px.order[i] = static_cast<std::uint32_t>(i);
+  }
+  std::sort(px.order.begin(), px.order.end(), [&](std::uint32_t a, std::uint32_t b) {
+    const double xa = px.reach[a] < 0 ? 1e300 : px.pose[a].position.x();
+    const double xb = px.reach[b] < 0 ? 1e300 : px.pose[b].position.x();
+    return xa < xb || (xa == xb && a < b);
+  });
+  // Two passes over the sweep: count, then fill (CSR).
+  for (int pass = 0; pass < 2; ++pass) {
+    for (std::size_t a = 0; a < n; ++a) {
+      const std::uint32_t i = px.order[a];
+      if (px.reach[i] < 0) break;
+      const Vec3& pi = px.pose[i].position;
+      for (std::size_t b = a + 1; b < n; ++b) {
+        const std::uint32_t j = px.order[b];
+        if (px.reach[j] < 0) break;
+        const Vec3& pj = px.pose[j].position;
+        if (pj.x() - pi.x() > px.reach[i] + max_reach) break;
+        const double r = px.reach[i] + px.reach[j];
+        if ((pj - pi).squaredNorm() >= r * r) continue;
+        if (pass == 0) {
+          ++px.start[i + 1];
+          ++px.start[j + 1];
+        } else {
+          px.others[px.start[i] + px.count[i]++] = j;
+          px.others[px.start[j] + px.count[j]++] = i;
+        }
+      }
+    }
+    if (pass == 0) {
+      for (std::size_t i = 0; i < n; ++i) px.start[i + 1] += px.start[i];
+      px.others.resize(px.start[n]);
+    }
+  }
+  // Deterministic neighbour order (by index) regardless of the sweep.
+  for (std::size_t i = 0; i < n; ++i) std::sort(px.others.begin() + px.start[i], px.others.begin() + px.start[i + 1]);
+}
+
 void PhysicsSubstep(const World& model, const DroneModel& dm, DroneState* s, const Environment& env,
-                    double t, double t_tick, double h, std::uint64_t frame,
+                    const Neighbours& near, double t, double t_tick, double h, std::uint64_t frame,
                     std::vector<AirEvent>* events) {
   const MultirotorParams& p = dm.params;
   const DerivedParams& d = dm.derived;
@@ -223,6 +282,38 @@ void PhysicsSubstep(const World& model, const DroneModel& dm, DroneState* s, con
     }
   }
 
+  // Other drones: their contact spheres at the tick-start pose moved by the tick-start velocity.
+  const int first_drone_contact = nc;
+  for (const std::uint32_t* it = near.begin; finite_pose && it != near.end; ++it) {
+    const std::uint32_t j = *it;
+    const DroneModel& other = model.drones[j];
+    const Pose& op = near.proximity->pose[j];
+    const Vec3 ov = near.proximity->velocity[j];
+    const Vec3 oc = op.position + ov * t_obj;
+    const double reach = other.derived.bounding_radius + d.bounding_radius;
+    if ((oc - s->position).squaredNorm() >= reach * reach) continue;
+    const Mat3 orot = op.orientation.toRotationMatrix();
+    for (const ContactSphere& sp : d.spheres) {
+      const Vec3 c = s->position + rot * sp.center;
+      for (const ContactSphere& osp : other.derived.spheres) {
+        const Vec3 q = oc + orot * osp.center;
+        const Vec3 diff = c - q;
+        const double rr = sp.radius + osp.radius;
+        const double d2 = diff.squaredNorm();
+        if (d2 >= rr * rr) continue;
+        const double dist = std::sqrt(d2);
+        ContactPoint cp;
+        cp.normal = dist > 1e-9 ? Vec3(diff / dist) : Vec3(Vec3::UnitZ());
+        cp.point = q + cp.normal * osp.radius;
+        cp.depth = rr - dist;
+        cp.kind = ObjectKind::kDrone;
+        cp.object_id = other.id;
+        cp.object_velocity = ov;
+        add(cp);
+      }
+    }
+  }
+
   Vec3 dv_contact = Vec3::Zero();
   if (nc > 0) {
     const Mat3 iw_inv = rot * d.inertia_inv * rot.transpose();
@@ -241,6 +332,15 @@ void PhysicsSubstep(const World& model, const DroneModel& dm, DroneState* s, con
       c.mass_n = eff_mass(c.r, n);
       c.mass_t1 = eff_mass(c.r, c.t1);
       c.mass_t2 = eff_mass(c.r, c.t2);
+      if (i >= first_drone_contact) {
+        // Both drones resolve the same contact from their side: each takes its mass share of
+        // the impulse, m_other / (m + m_other), which conserves momentum for a head-on pair.
+        const double mo = model.Find(c.cp.object_id)->params.mass;
+        c.share = mo / (m + mo);
+        c.mass_n *= c.share;
+        c.mass_t1 *= c.share;
+        c.mass_t2 *= c.share;
+      }
       const Vec3 vrel = v1 + ww.cross(c.r) - c.cp.object_velocity;
       const double vn = n.dot(vrel);
       c.approach = std::max(0.0, -n.dot(v0 + (rot * w0).cross(c.r) - c.cp.object_velocity));
@@ -288,7 +388,7 @@ void PhysicsSubstep(const World& model, const DroneModel& dm, DroneState* s, con
     for (int i = 1; i < nc; ++i)
       if (contacts[i].cp.depth > contacts[deepest].cp.depth) deepest = i;
     const double excess = contacts[deepest].cp.depth - kSlop;
-    if (excess > 0) s->position += contacts[deepest].cp.normal * (kProjection * excess);
+    if (excess > 0) s->position += contacts[deepest].cp.normal * (kProjection * excess * contacts[deepest].share);
   }
   const Vec3 w_avg = (w0 + w1) * 0.5;
   const double angle = w_avg.norm() * h;

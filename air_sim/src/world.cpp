@@ -741,12 +741,20 @@ void Step(const World& model, WorldState* state, const Commands& commands, const
   }
   const int n = std::max(1, static_cast<int>(std::llround(dt / model.physics_dt)));
   const double h = dt / n;
+  detail::BuildProximity(model, state, dt);
+  const WorldState::Proximity& px = state->proximity;
   const double density_ratio = env.air_density / 1.225;
   for (std::size_t i = 0; i < model.drones.size(); ++i) {
     const DroneModel& dm = model.drones[i];
     DroneState& ds = state->drones[i];
     if (ds.id != dm.id) throw std::invalid_argument("Step: state drones are not in model order");
     Ctx ctx{model, dm, ds, state->reports, state->frame};
+    detail::Neighbours near;
+    near.proximity = &px;
+    if (px.others.size() > 0) {
+      near.begin = px.others.data() + px.start[i];
+      near.end = px.others.data() + px.start[i + 1];
+    }
     for (int k = 0; k < n; ++k) {
       const double t = t0 + k * h;
       const ControlGoal goal = UpdateCommand(ctx, t, h);
@@ -755,7 +763,7 @@ void Step(const World& model, WorldState* state, const Commands& commands, const
       ControllerUpdate(dm.params, dm.derived, goal, kv, model.gravity, density_ratio, h, &ds.controller, &motors);
       for (int r = 0; r < kMaxRotors; ++r) ds.rotors[r].command = motors[r];
       const std::uint64_t resets = ds.reset_count;
-      detail::PhysicsSubstep(model, dm, &ds, env, t, k * h, h, state->frame, &state->events);
+      detail::PhysicsSubstep(model, dm, &ds, env, near, t, k * h, h, state->frame, &state->events);
       if (ds.reset_count != resets) {
         Finish(ctx, CommandStatus::kCancelled, t + h, "drone reset to spawn: non-finite state");
         ds.command.mode = CommandMode::kIdle;

@@ -1,7 +1,7 @@
 // bench_air: physics throughput of the air simulation core.
 //
 // Full sub-step = command layer + cascaded controller + rotors/drag/integration + contact
-// queries (ground plane, a 4,800-triangle town mesh, one vehicle box nearby).
+// queries (ground plane, a 4,800-triangle town mesh, one vehicle box, the other drones).
 // Prints JSON lines; the last one is the summary read by `bench/run air`:
 //   {"bench":"air","physics_hz":1000,"drones":1,"steps_per_s":...,"drones_realtime":...}
 // Usage: bench_air [--quick]
@@ -65,11 +65,12 @@ Scenario Make(int n) {
   s.env.vehicles.push_back(car);
   for (int i = 0; i < n; ++i) {
     Pose spawn;
-    const double street = 3.0 + 30.0 * (i % 20);
-    spawn.position = Vec3(street, 3.0 + 30.0 * (i / 20 % 20), 0.06);
+    // 400 street corners; further drones go 1 m diagonally apart and 1 m higher per layer.
+    const int layer = i / 400;
+    spawn.position = Vec3(3.0 + 30.0 * (i % 20) + layer, 3.0 + 30.0 * (i / 20 % 20) + layer, 0.06);
     AddDrone(&s.model, &s.state, static_cast<DroneId>(i + 1), MultirotorParams{}, spawn);
     const Vec3 p = spawn.position;
-    const double z = 2.0 + (i % 5);
+    const double z = 2.0 + (i % 5) + layer;
     s.cmds.push_back({s.next++, static_cast<DroneId>(i + 1), cmd::Arm{}});
     cmd::MoveOnPath path;
     path.path = {p + Vec3(0, 0, z), p + Vec3(0, 25, z), p + Vec3(25, 25, z), p + Vec3(25, 0, z), p + Vec3(0, 0, z)};

@@ -13,7 +13,7 @@
 
 namespace lockstep::air {
 
-enum class ObjectKind : std::uint8_t { kNone = 0, kGround = 1, kStatic = 2, kVehicle = 3 };
+enum class ObjectKind : std::uint8_t { kNone = 0, kGround = 1, kStatic = 2, kVehicle = 3, kDrone = 4 };
 const char* ToString(ObjectKind k);
 
 // One contact between a drone sphere and an object.
@@ -23,7 +23,7 @@ struct ContactPoint {
   double depth = 0;                     // m, penetration (> 0)
   Vec3 object_velocity = Vec3::Zero();  // m/s, world ENU, velocity of the object's surface at point
   ObjectKind kind = ObjectKind::kNone;
-  std::uint32_t object_id = 0;          // vehicle id, mesh id, 0 for the ground
+  std::uint32_t object_id = 0;          // vehicle id, mesh id, drone id, 0 for the ground
 };
 
 // A vehicle (or any moving obstacle) as an oriented box, as seen at frame k. The air sim

@@ -36,6 +36,8 @@ struct World {
   double gravity = 9.80665;         // m/s^2, along -z
   std::uint64_t seed = 0;           // run seed; per-drone generators derive from (seed, id)
   double restitution_threshold = 0.3;  // m/s: slower impacts do not bounce (resting contact)
+  bool drone_collisions = true;     // drones collide with each other (Jacobi: each sees the
+                                    // others' tick-start pose, extrapolated by velocity)
 
   const DroneModel* Find(DroneId id) const;
 };
@@ -163,6 +165,18 @@ struct WorldState {
   std::vector<DroneState> drones;        // parallel to World::drones
   std::vector<CommandReport> reports;    // command status changes of the last Step
   std::vector<AirEvent> events;          // events of the last Step
+
+  // Scratch rebuilt by every Step (kept here so that stepping does not allocate): each drone's
+  // state at the tick start, and for each drone the other drones it may touch in this tick.
+  struct Proximity {
+    std::vector<Pose> pose;                // tick-start pose per drone index
+    std::vector<Vec3> velocity;            // tick-start velocity per drone index
+    std::vector<double> reach;             // bounding radius + travel in the tick
+    std::vector<std::uint32_t> order;      // drone indices sorted by x
+    std::vector<std::uint32_t> start;      // CSR offsets into others (size drones + 1)
+    std::vector<std::uint32_t> others;     // neighbour drone indices
+    std::vector<std::uint32_t> count;      // per-drone fill counter
+  } proximity;
 
   DroneState* Find(DroneId id);
   const DroneState* Find(DroneId id) const;

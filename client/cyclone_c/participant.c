@@ -14,7 +14,9 @@
  * Per tick it writes one line:
  *   tick <run> <frame> <n_commands> ground_frame=<g> air_frame=<a>
  * where g and a are the newest GroundState / AirState frames of the run seen when the
- * step ran (0 = none yet). WorldInfo gives a line "world run=.. map=.. seed=.. required=..".
+ * step ran (0 = none yet). WorldInfo gives a line "world run=.. map=.. seed=.. required=..",
+ * FrameDone a line "done <run> <frame> ground_frame=<g> air_frame=<a>" (several FrameDone
+ * arriving together give one line, for the newest).
  *
  * All QoS are set explicitly (Cyclone and Fast DDS have different defaults) and mirror
  * deploy/qos/fastdds.xml. Network settings come from CYCLONEDDS_URI (README.md).
@@ -71,6 +73,7 @@ typedef struct participant {
   uint64_t ground_frame;    /* newest GroundState frame of `run` seen */
   uint64_t air_frame;       /* newest AirState frame of `run` seen */
   uint64_t last_done;       /* newest FrameDone frame of `run` */
+  uint64_t printed_done;    /* newest FrameDone frame reported */
   bool have_tick;           /* a tick taken and not yet handled */
   uint32_t tick_run;
   uint64_t tick_frame;
@@ -269,6 +272,7 @@ static void begin_run(participant *p, uint32_t run) {
   p->ground_frame = 0;
   p->air_frame = 0;
   p->last_done = 0;
+  p->printed_done = 0;
 }
 
 static bool join(participant *p) {
@@ -317,6 +321,23 @@ static bool step(participant *p, uint64_t frame, uint32_t n_commands) {
   p->last_hash = h;
   fprintf(p->out, "tick %" PRIu32 " %" PRIu64 " %" PRIu32 " ground_frame=%" PRIu64 " air_frame=%" PRIu64 "\n", p->run,
           frame, n_commands, p->ground_frame, p->air_frame);
+  fflush(p->out);
+  return true;
+}
+
+/* FrameDone k: all outputs of frame k are complete. Report the state frames seen then;
+ * with --wait-state first wait (bounded) until the state of frame k itself has arrived. */
+static bool handle_done(participant *p) {
+  const uint64_t frame = p->last_done;
+  if (p->opt.wait_state) {
+    const dds_time_t deadline = dds_time() + p->opt.state_timeout;
+    while ((p->ground_frame < frame || p->air_frame < frame) && dds_time() < deadline) {
+      if (!pump(p, deadline)) return false;
+    }
+  }
+  p->printed_done = frame;
+  fprintf(p->out, "done %" PRIu32 " %" PRIu64 " ground_frame=%" PRIu64 " air_frame=%" PRIu64 "\n", p->run, frame,
+          p->ground_frame, p->air_frame);
   fflush(p->out);
   return true;
 }
@@ -457,6 +478,10 @@ int main(int argc, char **argv) {
 
   if (join(&p)) {
     while (!g_stop) {
+      if (p.last_done > p.printed_done) {
+        if (!handle_done(&p)) break;
+        continue;
+      }
       if (p.have_tick) {
         if (!handle_tick(&p)) break;
         continue;

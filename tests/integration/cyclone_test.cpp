@@ -1,0 +1,226 @@
+// The wire contract is vendor neutral: a Cyclone DDS participant written in C
+// (client/cyclone_c) joins a tick barrier run by the Fast DDS coordinator as a required
+// service, reads WorldInfo and the world state, and the frames complete only with it.
+#include <gtest/gtest.h>
+
+#include <csignal>
+#include <fstream>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "lockstep/runtime/service.h"
+#include "observer.h"
+#include "process.h"
+
+namespace lockstep::testing {
+namespace {
+
+using namespace std::chrono_literals;
+
+constexpr uint64_t kFrames = 100;
+const char* kProfile = "lockstep.participant.loopback";
+
+// Stands in for ground_sim and air_sim: each step publishes a GroundState and an AirState
+// stamped with the tick's frame (before the runner acks it).
+class StatePublisher final : public ServiceCore {
+ public:
+  explicit StatePublisher(Bus& bus) : ground_(bus, topics::kGroundState), air_(bus, topics::kAirState) {}
+  void BeginRun(const msg::WorldInfo&) override {}
+  void Step(const msg::Tick& tick) override {
+    msg::FrameStamp stamp;
+    stamp.run(tick.run());
+    stamp.frame(tick.frame());
+    stamp.sim_time(tick.sim_time());
+    msg::GroundState g;
+    g.stamp(stamp);
+    g.state_hash(tick.frame());
+    ground_.Write(g);
+    msg::AirState a;
+    a.stamp(stamp);
+    a.state_hash(tick.frame());
+    air_.Write(a);
+  }
+
+ private:
+  Writer<msg::GroundState> ground_;
+  Writer<msg::AirState> air_;
+};
+
+// A ServiceRunner on its own thread, stopped and joined on destruction (also on failure).
+class ServiceThread {
+ public:
+  ServiceThread(Bus& bus, const std::string& name, ServiceCore& core)
+      : runner_(bus, ServiceOptions{name, "state_pub", false}, core), thread_([this] {
+          try {
+            runner_.Run(stop_);
+          } catch (const std::exception& e) {
+            error_ = e.what();
+          }
+        }) {}
+  ~ServiceThread() {
+    stop_ = true;
+    thread_.join();
+  }
+  const std::string& error() const { return error_; }
+
+ private:
+  std::atomic<bool> stop_{false};
+  std::string error_;
+  ServiceRunner runner_;
+  std::thread thread_;
+};
+
+std::string ReadFile(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::vector<std::string> Lines(const std::string& text, const std::string& prefix) {
+  std::vector<std::string> out;
+  std::istringstream in(text);
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind(prefix, 0) == 0) out.push_back(line);
+  }
+  return out;
+}
+
+struct TickLine {
+  uint32_t run = 0;
+  uint64_t frame = 0;
+  uint32_t commands = 0;
+  uint64_t ground = 0;
+  uint64_t air = 0;
+};
+
+// "tick <run> <frame> <n_commands> ground_frame=<g> air_frame=<a>"
+// "done <run> <frame> ground_frame=<g> air_frame=<a>"
+TickLine Parse(const std::string& line) {
+  TickLine t;
+  unsigned long long frame = 0, ground = 0, air = 0;
+  unsigned run = 0, commands = 0;
+  if (line.rfind("tick ", 0) == 0) {
+    EXPECT_EQ(std::sscanf(line.c_str(), "tick %u %llu %u ground_frame=%llu air_frame=%llu", &run, &frame, &commands, &ground,
+                          &air),
+              5)
+        << line;
+  } else {
+    EXPECT_EQ(std::sscanf(line.c_str(), "done %u %llu ground_frame=%llu air_frame=%llu", &run, &frame, &ground, &air), 4)
+        << line;
+  }
+  t.run = run;
+  t.frame = frame;
+  t.commands = commands;
+  t.ground = ground;
+  t.air = air;
+  return t;
+}
+
+bool Alive(const msg::RunStatus& s, const std::string& name) {
+  for (const auto& m : s.members()) {
+    if (m.service().to_string() == name) return m.alive();
+  }
+  return false;
+}
+
+TEST(CycloneParticipant, JoinsTheFastDdsBarrierAndReadsWorldState) {
+  const int domain = TestDomain();
+  const std::string config = WriteTempFile("cyclone.yaml",
+                                           "domain_id: " + std::to_string(domain) + "\n"
+                                           "participant_profile: " + kProfile + "\n"
+                                           "ticks: " + std::to_string(kFrames) + "\n"
+                                           "seed: 7\n"
+                                           "world:\n"
+                                           "  synchronous_mode: false\n"
+                                           "  service_timeout: 5.0\n"
+                                           "services:\n"
+                                           "  - {name: alpha, kind: noop}\n"
+                                           "  - {name: cyc, kind: cyclone_c}\n"
+                                           "  - {name: state_pub, kind: state_pub}\n");
+  auto bus = CreateDdsBus({domain, "", kProfile, "cyclone_test"});
+  Observer observer(*bus);
+
+  Process coordinator({Bin("lockstep_coordinator"), config});
+  Process alpha({Bin("lockstep_noop"), "--name", "alpha", "--config", config});
+  StatePublisher state_core(*bus);
+  ServiceThread state_pub(*bus, "state_pub", state_core);
+
+  // (a) Both Fast DDS services are alive, the Cyclone one is not there yet: the coordinator
+  // waits for it and no frame completes.
+  ASSERT_TRUE(observer.WaitUntil(
+      [&] {
+        auto s = observer.status();
+        return s && Alive(*s, "alpha") && Alive(*s, "state_pub");
+      },
+      20s))
+      << "coordinator:\n" << coordinator.Output() << "\nalpha:\n" << alpha.Output();
+  EXPECT_FALSE(observer.WaitUntil([&] { return observer.last_frame() > 0; }, 1500ms))
+      << "a frame completed without the required Cyclone participant";
+  {
+    auto s = observer.status();
+    ASSERT_TRUE(s);
+    EXPECT_EQ(s->state(), msg::RunState::RUN_WAITING_FOR_SERVICES);
+    EXPECT_FALSE(Alive(*s, "cyc"));
+    EXPECT_EQ(s->frame(), 0u);
+  }
+
+  // (b) The Cyclone participant joins: every frame completes and it stepped each once.
+  const std::string ticks_file = WriteTempFile("cyc_ticks.txt", "");
+  Process cyc({Bin("lockstep_cyclone_participant"), "--name", "cyc", "--domain", std::to_string(domain), "--ticks-file",
+               ticks_file, "--wait-state"},
+              {{"CYCLONEDDS_URI", "file://" + SourceDir() + "/client/cyclone_c/cyclone_loopback.xml"}});
+  auto diagnostics = [&] {
+    return "coordinator:\n" + coordinator.Output() + "\ncyc:\n" + cyc.Output() + "\ncyc ticks:\n" + ReadFile(ticks_file) +
+           "\nstate_pub: " + state_pub.error();
+  };
+  ASSERT_EQ(coordinator.Wait(40s), std::optional<int>(0)) << diagnostics();
+  ASSERT_TRUE(observer.WaitUntil([&] { return observer.last_frame() == kFrames; }, 5s)) << diagnostics();
+  EXPECT_EQ(observer.frames().size(), kFrames);
+  // FrameDone N reached the participant and, with it, the state of frame N.
+  const std::string last_done = "done 1 " + std::to_string(kFrames) + " ";
+  ASSERT_TRUE(observer.WaitUntil(
+      [&] {
+        for (const auto& l : Lines(ReadFile(ticks_file), "done ")) {
+          if (l.rfind(last_done, 0) == 0) return true;
+        }
+        return false;
+      },
+      10s))
+      << diagnostics();
+  cyc.Signal(SIGTERM);
+  ASSERT_EQ(cyc.Wait(10s), std::optional<int>(0)) << diagnostics();
+
+  const std::string out = ReadFile(ticks_file);
+  // It read WorldInfo: run, seed and the barrier's members.
+  const auto world = Lines(out, "world ");
+  ASSERT_FALSE(world.empty()) << out;
+  EXPECT_EQ(world.front(), "world run=1 map= seed=7 dt=0.05 sync=0 required=alpha,cyc,state_pub");
+
+  const auto ticks = Lines(out, "tick ");
+  ASSERT_EQ(ticks.size(), kFrames) << out;
+  for (uint64_t k = 1; k <= kFrames; ++k) {
+    const TickLine t = Parse(ticks[k - 1]);
+    EXPECT_EQ(t.run, 1u);
+    ASSERT_EQ(t.frame, k) << "frames out of order or repeated:\n" << out;
+    EXPECT_EQ(t.commands, 0u);
+    // (c) World state. state_pub wrote state k-1 before acking k-1, and tick k starts only
+    // after that ack, but DDS orders samples per writer only, so the participant waits for
+    // state k-1 (--wait-state) before stepping k. State k may already be there, never k+1.
+    EXPECT_GE(t.ground, k - 1) << ticks[k - 1];
+    EXPECT_LE(t.ground, k) << ticks[k - 1];
+    EXPECT_GE(t.air, k - 1) << ticks[k - 1];
+    EXPECT_LE(t.air, k) << ticks[k - 1];
+  }
+  const auto done = Lines(out, last_done);
+  ASSERT_EQ(done.size(), 1u) << out;
+  const TickLine d = Parse(done.front());
+  EXPECT_EQ(d.ground, kFrames) << done.front();
+  EXPECT_EQ(d.air, kFrames) << done.front();
+  EXPECT_NE(coordinator.Output().find("service 'cyc' (cyclone_c"), std::string::npos) << coordinator.Output();
+}
+
+}  // namespace
+}  // namespace lockstep::testing

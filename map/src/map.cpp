@@ -175,9 +175,10 @@ Waypoint Map::MakeWaypoint(int road, int section, int lane, double s) const {
   return wp;
 }
 
-std::vector<Waypoint> Map::Walk(const Waypoint& wp, double distance, bool forward, int depth) const {
+std::vector<Waypoint> Map::Walk(const Waypoint& wp, double distance, bool forward, int* budget) const {
   const int id = NodeOf(wp);
-  if (id < 0 || depth > 256 || !(distance >= 0)) return {};
+  // The budget bounds the branching walk on pathological graphs (zero-length loops).
+  if (id < 0 || --*budget < 0 || !(distance >= 0)) return {};
   const LaneNode& n = nodes_[static_cast<std::size_t>(id)];
   const double sign = ((n.lane < 0) == forward) ? 1.0 : -1.0;
   const double room = sign > 0 ? n.s_end - wp.s : wp.s - n.s_begin;
@@ -186,13 +187,19 @@ std::vector<Waypoint> Map::Walk(const Waypoint& wp, double distance, bool forwar
   for (int next : forward ? n.successors : n.predecessors) {
     const LaneNode& m = nodes_[static_cast<std::size_t>(next)];
     const Waypoint entry = MakeWaypoint(m.road, m.section, m.lane, forward ? m.EntryS() : m.ExitS());
-    for (Waypoint& w : Walk(entry, distance - std::max(0.0, room), forward, depth + 1)) out.push_back(w);
+    for (Waypoint& w : Walk(entry, distance - std::max(0.0, room), forward, budget)) out.push_back(w);
   }
   return out;
 }
 
-std::vector<Waypoint> Map::Next(const Waypoint& wp, double distance) const { return Walk(wp, distance, true, 0); }
-std::vector<Waypoint> Map::Previous(const Waypoint& wp, double distance) const { return Walk(wp, distance, false, 0); }
+std::vector<Waypoint> Map::Next(const Waypoint& wp, double distance) const {
+  int budget = kWalkBudget;
+  return Walk(wp, distance, true, &budget);
+}
+std::vector<Waypoint> Map::Previous(const Waypoint& wp, double distance) const {
+  int budget = kWalkBudget;
+  return Walk(wp, distance, false, &budget);
+}
 
 std::vector<Waypoint> Map::NextUntilLaneEnd(const Waypoint& wp, double distance) const {
   std::vector<Waypoint> out;

@@ -51,6 +51,10 @@ double ProjectToReference(const Road& road, double x, double y, double s, double
   return s;
 }
 
+// Lanes wider than this (only in broken files) are indexed as if this wide, so one
+// segment cannot fill the whole grid.
+constexpr double kMaxIndexedHalfWidth = 100.0;
+
 std::unique_ptr<SegmentIndex> BuildSegmentIndex(const Map& map, Eigen::Vector2d* bmin, Eigen::Vector2d* bmax) {
   auto idx = std::make_unique<SegmentIndex>();
   const OpenDrive& od = map.Data();
@@ -68,7 +72,10 @@ std::unique_ptr<SegmentIndex> BuildSegmentIndex(const Map& map, Eigen::Vector2d*
     for (std::size_t k = 0; k < st.size(); ++k) {
       const LaneSpan span = LaneSpanOf(road, static_cast<std::size_t>(n.section), n.lane, st[k]);
       const Eigen::Vector3d p = RoadToWorld(road, st[k], span.Center());
-      const double hw = 0.5 * span.Width();
+      if (!p.allFinite() || p.head<2>().cwiseAbs().maxCoeff() > 1e9) {
+        break;  // geometry blew up (hostile input): stop indexing this lane
+      }
+      const double hw = std::min(0.5 * span.Width(), kMaxIndexedHalfWidth);
       if (k > 0) {
         idx->segments.push_back(LaneSegment{px, py, p.x(), p.y(), st[k - 1], st[k],
                                             static_cast<float>(std::max(hw, pw)), static_cast<int>(ni)});
@@ -92,7 +99,8 @@ std::unique_ptr<SegmentIndex> BuildSegmentIndex(const Map& map, Eigen::Vector2d*
   idx->x0 = minx - margin;
   idx->y0 = miny - margin;
   const double w = maxx - minx + 2 * margin, h = maxy - miny + 2 * margin;
-  idx->cell = std::max(8.0, std::sqrt(w * h / 2.0e6));  // at most ~2M cells
+  // At most ~2M cells and 4096 per axis, whatever the map's shape.
+  idx->cell = std::max({8.0, std::sqrt(w * h / 2.0e6), w / 4096.0, h / 4096.0});
   idx->nx = std::max(1, static_cast<int>(std::ceil(w / idx->cell)));
   idx->ny = std::max(1, static_cast<int>(std::ceil(h / idx->cell)));
   const std::size_t ncell = static_cast<std::size_t>(idx->nx) * static_cast<std::size_t>(idx->ny);
@@ -129,6 +137,12 @@ inline double SegmentDist2(const LaneSegment& s, double x, double y, double* u_o
   return ex * ex + ey * ey;
 }
 
+// Grid coordinate of x, clamped to one cell outside the grid (the ring search and the
+// containment lookup both work with that), computed in double so it cannot overflow.
+inline int CellCoord(double x, double x0, double cell, int n) {
+  return static_cast<int>(std::clamp(std::floor((x - x0) / cell), -1.0, static_cast<double>(n)));
+}
+
 }  // namespace
 
 std::optional<Waypoint> Map::NearestWaypoint(const Eigen::Vector3d& p, bool project_to_road, LaneTypeMask types) const {
@@ -150,8 +164,9 @@ std::optional<Waypoint> Map::NearestWaypoint(const Eigen::Vector3d& p, bool proj
   const SegmentIndex& ix = *index_;
   if (ix.segments.empty()) return std::nullopt;
   const double x = p.x(), y = p.y();
-  const int cx = static_cast<int>(std::floor((x - ix.x0) / ix.cell));
-  const int cy = static_cast<int>(std::floor((y - ix.y0) / ix.cell));
+  if (!std::isfinite(x) || !std::isfinite(y)) return std::nullopt;
+  const int cx = CellCoord(x, ix.x0, ix.cell, ix.nx);
+  const int cy = CellCoord(y, ix.y0, ix.cell, ix.ny);
   const int max_r = std::max({std::abs(cx), std::abs(cy), std::abs(ix.nx - cx), std::abs(ix.ny - cy)}) + 1;
   double best_d2 = std::numeric_limits<double>::infinity(), best_u = 0;
   int best_seg = -1;
@@ -199,8 +214,9 @@ std::optional<Waypoint> Map::NearestWaypoint(const Eigen::Vector3d& p, bool proj
 std::vector<LanePoint> Map::LanesAt(double x, double y) const {
   std::vector<LanePoint> out;
   const SegmentIndex& ix = *index_;
-  const int cx = static_cast<int>(std::floor((x - ix.x0) / ix.cell));
-  const int cy = static_cast<int>(std::floor((y - ix.y0) / ix.cell));
+  if (!std::isfinite(x) || !std::isfinite(y)) return out;
+  const int cx = CellCoord(x, ix.x0, ix.cell, ix.nx);
+  const int cy = CellCoord(y, ix.y0, ix.cell, ix.ny);
   if (cx < 0 || cy < 0 || cx >= ix.nx || cy >= ix.ny) return out;
   const std::size_t c = static_cast<std::size_t>(cy) * static_cast<std::size_t>(ix.nx) + static_cast<std::size_t>(cx);
   // Best segment per node (few nodes per cell, so a flat vector beats a hash map).

@@ -23,6 +23,7 @@ const char* ToString(RoadOption o) {
 namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr std::size_t kMaxSteps = 2000000;  // ~4000 km at 2 m: far beyond any real route
 
 struct Parent {
   int prev = -1;                 // node whose exit we came from (-1: the start)
@@ -215,7 +216,9 @@ class Planner {
           if (chord <= o_.resolution_m * 1.01) break;
           ds = probe * o_.resolution_m / chord;
         }
-        d += ds;
+        // Floor: hostile geometry (lanes that jump sideways) must not stall the walk.
+        d += std::max(ds, 0.05 * o_.resolution_m);
+        if (route.steps.size() > kMaxSteps) return route;
         step.option = first_of_leg && l.into != RoadOption::LaneFollow ? l.into : command[i];
         first_of_leg = false;
         route.steps.push_back(step);

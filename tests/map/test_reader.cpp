@@ -129,3 +129,19 @@ TEST(map_reader, MissingFile) {
 
 }  // namespace
 }  // namespace lockstep::map
+
+namespace lockstep::map {
+namespace {
+
+// The fuzzer's seeds are real inputs too: all but the truncated one must load.
+TEST(map_reader, FuzzSeedCorpusLoads) {
+  const std::string dir = LOCKSTEP_MAP_FUZZ_CORPUS;
+  for (const char* name : {"straight.xodr", "curves.xodr", "junction.xodr", "minimal.xodr"}) {
+    const OpenDrive od = LoadOpenDriveFile(dir + "/" + name);
+    EXPECT_FALSE(od.roads.empty()) << name;
+  }
+  EXPECT_THROW(LoadOpenDriveFile(dir + "/truncated.xodr"), MapError);
+}
+
+}  // namespace
+}  // namespace lockstep::map

@@ -100,7 +100,8 @@ class Map {
  private:
   void BuildGraph();
   void LinkRoadEnd(int node_id, bool at_end);
-  std::vector<Waypoint> Walk(const Waypoint& wp, double distance, bool forward, int depth) const;
+  static constexpr int kWalkBudget = 20000;  // lane nodes visited by one Next/Previous at most
+  std::vector<Waypoint> Walk(const Waypoint& wp, double distance, bool forward, int* budget) const;
   std::optional<Waypoint> Neighbour(const Waypoint& wp, int lane) const;
   std::optional<LaneMarking> MarkingBetween(const Waypoint& wp, int lane_a, int lane_b) const;
 

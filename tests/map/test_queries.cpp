@@ -74,6 +74,24 @@ TEST_P(map_carla, RoadLinksTouch) {
   EXPECT_GT(checked, 100);
 }
 
+// Each planView record ends where the next one starts: checks the arc evaluation
+// against the file's own start points.
+TEST_P(map_carla, PlanViewRecordsAreContinuous) {
+  const Map& m = Town(GetParam());
+  int joints = 0;
+  for (const Road& r : m.Data().roads) {
+    for (std::size_t i = 0; i + 1 < r.plan_view.size(); ++i) {
+      const Geometry& g = r.plan_view[i];
+      const Geometry& n = r.plan_view[i + 1];
+      const Pose2 end = EvaluateGeometry(g, g.length);
+      EXPECT_LT(std::hypot(end.x - n.x, end.y - n.y), 0.01) << "road " << r.id << " record " << i;
+      EXPECT_NEAR(std::remainder(end.hdg - n.hdg, 2 * std::numbers::pi), 0.0, 1e-3) << "road " << r.id;
+      ++joints;
+    }
+  }
+  EXPECT_GT(joints, 100);
+}
+
 TEST_P(map_carla, NextWalksThroughEveryJunction) {
   const Map& m = Town(GetParam());
   std::set<int> visited;

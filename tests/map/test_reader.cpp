@@ -2,6 +2,7 @@
 
 #include <string>
 
+#include "lockstep/map/map.h"
 #include "lockstep/map/opendrive_reader.h"
 
 namespace lockstep::map {
@@ -141,6 +142,33 @@ TEST(map_reader, FuzzSeedCorpusLoads) {
     EXPECT_FALSE(od.roads.empty()) << name;
   }
   EXPECT_THROW(LoadOpenDriveFile(dir + "/truncated.xodr"), MapError);
+}
+
+}  // namespace
+}  // namespace lockstep::map
+
+#include "lockstep/map/map_info.h"
+
+namespace lockstep::map {
+namespace {
+
+// Reference numbers computed independently from the XML (Python ElementTree: sum of
+// road lengths, junction roads, driving lanes x section lengths).
+TEST(map_info, CarlaTownStatistics) {
+  struct Expect { const char* town; int roads, junctions; double length, junction_length, driving; };
+  for (const Expect& e : {Expect{"Town01", 122, 12, 4216.062, 1736.247, 6402.159},
+                          Expect{"Town02", 84, 8, 1999.518, 943.299, 2919.390}}) {
+    const MapStats s = ComputeStats(Map::Load(kDir + "/" + e.town + ".xodr"));
+    EXPECT_EQ(s.name, e.town);
+    EXPECT_EQ(s.roads, e.roads);
+    EXPECT_EQ(s.junctions, e.junctions);
+    EXPECT_NEAR(s.road_length_m, e.length, 1e-3);
+    EXPECT_NEAR(s.junction_road_length_m, e.junction_length, 1e-3);
+    EXPECT_NEAR(s.driving_lane_length_m, e.driving, 1e-3);
+    EXPECT_GT(s.spawn_points, 50);
+    const std::string text = StatsToText(s);
+    EXPECT_NE(text.find("junctions:"), std::string::npos);
+  }
 }
 
 }  // namespace

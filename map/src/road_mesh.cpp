@@ -137,6 +137,24 @@ std::vector<Mesh> BuildRoadMeshes(const Map& map, const RoadMeshOptions& o, std:
         }
       }
     }
+    // Crosswalks: zebra stripes along the road over the object's outline bounding box.
+    for (const RoadObject& obj : road.objects) {
+      if (obj.type != "crosswalk") continue;
+      double u0 = 1e9, u1 = -1e9, v0 = 1e9, v1 = -1e9;
+      for (const auto& [u, v] : obj.outline_local) {
+        u0 = std::min(u0, u); u1 = std::max(u1, u); v0 = std::min(v0, v); v1 = std::max(v1, v);
+      }
+      if (obj.outline_local.empty()) {  // no outline: length along the road, width across
+        u0 = -0.5 * obj.length; u1 = 0.5 * obj.length; v0 = -0.5 * obj.width; v1 = 0.5 * obj.width;
+      }
+      if (!(u1 > u0) || !(v1 > v0) || (v1 - v0) > 200 || (u1 - u0) > 200) continue;
+      const double c = std::cos(obj.yaw), sn = std::sin(obj.yaw);
+      auto P = [&](double u, double v) {
+        return Eigen::Vector3d(obj.x + u * c - v * sn, obj.y + u * sn + v * c, obj.z + o.marking_lift_m);
+      };
+      for (double v = v0 + 0.25; v + 0.5 <= v1 + 1e-9; v += 1.0)
+        paint.AddQuad(P(u0, v), P(u1, v), P(u1, v + 0.5), P(u0, v + 0.5), up);
+    }
     for (Mesh* m : {&surf, &walk, &verge, &paint}) {
       if (m->indices.empty()) continue;
       m->instance_id = first_instance_id++;

@@ -295,13 +295,24 @@ class Writer {
           os_ << "      <laneSection s=\"0.000000\">\n        <center>\n          <lane id=\"0\" type=\"none\" level=\"false\">\n"
                  "            <roadMark sOffset=\"0.000000\" type=\"none\" color=\"standard\" width=\"0.000000\" laneChange=\"none\"/>\n"
                  "          </lane>\n        </center>\n        <right>\n";
+          // Turns on the outside of the block get the corner sidewalk on their right: every
+          // right turn, and at two-arm corners the left turn too (nothing else is there).
+          const bool corner_walk = !straight && (cross < 0 || arms.size() == 2);
+          const int in_walk = in.at_start ? 2 : -2, out_walk = out.at_start ? -2 : 2;
           Lane(-1, "driving", p_.lane_w,
-               "<roadMark sOffset=\"0.000000\" type=\"none\" color=\"standard\" width=\"0.000000\" laneChange=\"none\"/>",
+               corner_walk ? "<roadMark sOffset=\"0.000000\" type=\"curb\" color=\"standard\" width=\"0.150000\" laneChange=\"none\"/>"
+                           : "<roadMark sOffset=\"0.000000\" type=\"none\" color=\"standard\" width=\"0.000000\" laneChange=\"none\"/>",
                "<predecessor id=\"" + std::to_string(in_lane) + "\"/><successor id=\"" + std::to_string(out_lane) + "\"/>");
+          if (corner_walk)
+            Lane(-2, "sidewalk", p_.walk_w,
+                 "<roadMark sOffset=\"0.000000\" type=\"none\" color=\"standard\" width=\"0.000000\" laneChange=\"none\"/>",
+                 "<predecessor id=\"" + std::to_string(in_walk) + "\"/><successor id=\"" + std::to_string(out_walk) + "\"/>");
           os_ << "        </right>\n      </laneSection>\n    </lanes>\n  </road>\n";
           junctions << "    <connection id=\"" << connection++ << "\" incomingRoad=\"" << StreetId(in.road)
                     << "\" connectingRoad=\"" << id << "\" contactPoint=\"start\">\n      <laneLink from=\"" << in_lane
-                    << "\" to=\"-1\"/>\n    </connection>\n";
+                    << "\" to=\"-1\"/>\n";
+          if (corner_walk) junctions << "      <laneLink from=\"" << in_walk << "\" to=\"-2\"/>\n";
+          junctions << "    </connection>\n";
           town->roads += 1;
           town->road_length_m += len;
           town->junction_road_length_m += len;

@@ -131,8 +131,7 @@ TEST(CycloneParticipant, JoinsTheFastDdsBarrierAndReadsWorldState) {
   const std::string config = WriteTempFile("cyclone.yaml",
                                            "domain_id: " + std::to_string(domain) + "\n"
                                            "participant_profile: " + kProfile + "\n"
-                                           "ticks: " + std::to_string(kFrames) + "\n"
-                                           "seed: 7\n"
+                                                                                      "seed: 7\n"
                                            "world:\n"
                                            "  synchronous_mode: false\n"
                                            "  service_timeout: 5.0\n"
@@ -167,7 +166,10 @@ TEST(CycloneParticipant, JoinsTheFastDdsBarrierAndReadsWorldState) {
     EXPECT_EQ(s->frame(), 0u);
   }
 
-  // (b) The Cyclone participant joins: every frame completes and it stepped each once.
+  // (b) The Cyclone participant joins: frames complete, and it stepped each exactly once.
+  // The run is free-running with no tick limit and stopped by the test once kFrames are
+  // done and seen by everyone: a coordinator that exits on its own after N ticks tears its
+  // writers down at once, and the last FrameDone can be lost in flight.
   const std::string ticks_file = WriteTempFile("cyc_ticks.txt", "");
   Process cyc({Bin("lockstep_cyclone_participant"), "--name", "cyc", "--domain", std::to_string(domain), "--ticks-file",
                ticks_file, "--wait-state"},
@@ -176,22 +178,20 @@ TEST(CycloneParticipant, JoinsTheFastDdsBarrierAndReadsWorldState) {
     return "coordinator:\n" + coordinator.Output() + "\ncyc:\n" + cyc.Output() + "\ncyc ticks:\n" + ReadFile(ticks_file) +
            "\nstate_pub: " + state_pub.error();
   };
-  ASSERT_EQ(coordinator.Wait(40s), std::optional<int>(0)) << diagnostics();
-  ASSERT_TRUE(observer.WaitUntil([&] { return observer.last_frame() == kFrames; }, 5s)) << diagnostics();
-  EXPECT_EQ(observer.frames().size(), kFrames);
-  // FrameDone N reached the participant and, with it, the state of frame N.
-  const std::string last_done = "done 1 " + std::to_string(kFrames) + " ";
+  ASSERT_TRUE(observer.WaitUntil([&] { return observer.last_frame() >= kFrames; }, 40s)) << diagnostics();
+  // FrameDone reached the Cyclone participant too (over Cyclone, from the Fast DDS writer).
   ASSERT_TRUE(observer.WaitUntil(
       [&] {
-        for (const auto& l : Lines(ReadFile(ticks_file), "done ")) {
-          if (l.rfind(last_done, 0) == 0) return true;
-        }
-        return false;
+        const auto done = Lines(ReadFile(ticks_file), "done ");
+        return !done.empty() && Parse(done.back()).frame >= kFrames;
       },
       10s))
       << diagnostics();
+  coordinator.Signal(SIGINT);
+  ASSERT_EQ(coordinator.Wait(10s), std::optional<int>(0)) << diagnostics();
   cyc.Signal(SIGTERM);
   ASSERT_EQ(cyc.Wait(10s), std::optional<int>(0)) << diagnostics();
+  EXPECT_NE(cyc.Output().find("stopping after frame"), std::string::npos) << diagnostics();
 
   const std::string out = ReadFile(ticks_file);
   // It read WorldInfo: run, seed and the barrier's members.
@@ -200,11 +200,11 @@ TEST(CycloneParticipant, JoinsTheFastDdsBarrierAndReadsWorldState) {
   EXPECT_EQ(world.front(), "world run=1 map= seed=7 dt=0.05 sync=0 required=alpha,cyc,state_pub");
 
   const auto ticks = Lines(out, "tick ");
-  ASSERT_EQ(ticks.size(), kFrames) << out;
-  for (uint64_t k = 1; k <= kFrames; ++k) {
+  ASSERT_GE(ticks.size(), kFrames) << out;
+  for (uint64_t k = 1; k <= ticks.size(); ++k) {
     const TickLine t = Parse(ticks[k - 1]);
     EXPECT_EQ(t.run, 1u);
-    ASSERT_EQ(t.frame, k) << "frames out of order or repeated:\n" << out;
+    ASSERT_EQ(t.frame, k) << "frames missing, out of order or repeated:\n" << out;
     EXPECT_EQ(t.commands, 0u);
     // (c) World state. state_pub wrote state k-1 before acking k-1, and tick k starts only
     // after that ack, but DDS orders samples per writer only, so the participant waits for
@@ -214,11 +214,21 @@ TEST(CycloneParticipant, JoinsTheFastDdsBarrierAndReadsWorldState) {
     EXPECT_GE(t.air, k - 1) << ticks[k - 1];
     EXPECT_LE(t.air, k) << ticks[k - 1];
   }
-  const auto done = Lines(out, last_done);
-  ASSERT_EQ(done.size(), 1u) << out;
-  const TickLine d = Parse(done.front());
-  EXPECT_EQ(d.ground, kFrames) << done.front();
-  EXPECT_EQ(d.air, kFrames) << done.front();
+  // FrameDone k means all outputs of k are complete: the participant waits for the state
+  // of k itself before reporting it (later states may be there too: FrameDone k and
+  // tick k+1 come from different writers, so the participant may step on first).
+  const auto done = Lines(out, "done ");
+  ASSERT_FALSE(done.empty()) << out;
+  uint64_t previous = 0;
+  for (const auto& line : done) {
+    const TickLine d = Parse(line);
+    EXPECT_EQ(d.run, 1u);
+    EXPECT_GT(d.frame, previous) << line;
+    EXPECT_GE(d.ground, d.frame) << line;
+    EXPECT_GE(d.air, d.frame) << line;
+    previous = d.frame;
+  }
+  EXPECT_GE(previous, kFrames);
   EXPECT_NE(coordinator.Output().find("service 'cyc' (cyclone_c"), std::string::npos) << coordinator.Output();
 }
 

@@ -246,7 +246,7 @@ std::optional<LaneMarking> Map::MarkingBetween(const Waypoint& wp, int lane_a, i
   if ((lane_a < 0) != (lane_b < 0)) owner = 0;
   else owner = std::abs(lane_a) < std::abs(lane_b) ? lane_a : lane_b;
   const Lane* l = sec.Find(owner);
-  if (!l) return std::nullopt;
+  if (!l) return std::nullopt;  // no such border (e.g. outside the outermost lane)
   const RoadMark* m = MarkAt(*l, wp.s - sec.s);
   LaneMarking out;
   if (!m) return out;
@@ -260,26 +260,10 @@ std::optional<LaneMarking> Map::MarkingBetween(const Waypoint& wp, int lane_a, i
   return out;
 }
 
+// Left in the travel direction is always the inner border (towards the centre line).
 std::optional<LaneMarking> Map::LeftMarking(const Waypoint& wp) const {
-  const int inner = wp.lane < 0 ? wp.lane + 1 : wp.lane - 1;  // towards the centre lane
-  if (inner == 0) {
-    // The border with the centre lane: owner lane 0.
-    const Road& r = data_.roads[static_cast<std::size_t>(wp.road)];
-    const LaneSection& sec = r.sections[static_cast<std::size_t>(wp.section)];
-    const Lane* c = sec.Find(0);
-    LaneMarking out;
-    const RoadMark* m = c ? MarkAt(*c, wp.s - sec.s) : nullptr;
-    if (!m) return out;
-    out.type = m->type;
-    out.color = m->color;
-    out.width = m->width;
-    const int other = LeftOf(wp.lane);
-    out.lane_change = m->lane_change == MarkLaneChange::Both ? LaneChange::Both
-                      : Allows(m->lane_change, wp.lane, other) ? LaneChange::Left
-                                                                : LaneChange::None;
-    return out;
-  }
-  return MarkingBetween(wp, wp.lane, inner);
+  if (wp.road < 0) return std::nullopt;
+  return MarkingBetween(wp, wp.lane, LeftOf(wp.lane));
 }
 
 std::optional<LaneMarking> Map::RightMarking(const Waypoint& wp) const {

@@ -278,18 +278,23 @@ static void begin_run(participant *p, uint32_t run) {
 static bool join(participant *p) {
   if (!wait_world(p, true, 0)) return false;
   begin_run(p, p->world_run);
+  /* Our ack must reach the coordinator: wait (bounded) until the ack writer has matched
+   * its reader, else the first ack could go nowhere and the tick would time out; and until
+   * the tick reader has matched the tick writer, whose current tick (TRANSIENT_LOCAL) says
+   * whether the run is under way. */
+  const dds_time_t deadline = dds_time() + DDS_SECS(5);
+  for (;;) {
+    dds_publication_matched_status_t ack_st;
+    dds_subscription_matched_status_t tick_st;
+    dds_get_publication_matched_status(p->ack_writer, &ack_st);
+    dds_get_subscription_matched_status(p->tick_reader, &tick_st);
+    if ((ack_st.current_count > 0 && tick_st.current_count > 0) || dds_time() >= deadline) break;
+    if (!pump(p, dds_time() + DDS_MSECS(10))) return false;
+  }
+  pump(p, dds_time()); /* whatever the match brought */
   if (p->have_tick && p->tick_run == p->run && p->tick_frame > 0) {
     /* The run is under way: join stateless just before the current tick. */
     p->last_frame = p->tick_frame - 1;
-  }
-  /* Our ack must reach the coordinator: wait (bounded) until the ack writer has matched
-   * its reader, else the first ack could go nowhere and the tick would time out. */
-  const dds_time_t deadline = dds_time() + DDS_SECS(5);
-  for (;;) {
-    dds_publication_matched_status_t st;
-    dds_get_publication_matched_status(p->ack_writer, &st);
-    if (st.current_count > 0 || dds_time() >= deadline) break;
-    if (!pump(p, dds_time() + DDS_MSECS(10))) return false;
   }
   send_ack(p, p->last_frame);
   p->joined = true;

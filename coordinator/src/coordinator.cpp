@@ -425,6 +425,13 @@ struct Coordinator::Impl {
     Post(tick_writer, open_tick);
   }
 
+  // Before the process goes: the last FrameDone and RunStatus must reach their readers.
+  void DrainWriters() {
+    done_writer.WaitForAcknowledgments(1.0);
+    status_writer.WaitForAcknowledgments(1.0);
+    reply_writer.WaitForAcknowledgments(1.0);
+  }
+
   void LogSummary(Clock::time_point now) const {
     if (!first_tick || frame == 0) return;
     const double wall = std::chrono::duration<double>(now - *first_tick).count();
@@ -529,6 +536,8 @@ int Coordinator::Run(const std::atomic<bool>& stop) {
           s.PublishStatus(now);
           s.Flush(lock);
           s.LogSummary(now);
+          lock.unlock();
+          s.DrainWriters();
           return 0;
         }
       } else if (now >= s.tick_deadline) {
@@ -585,6 +594,8 @@ int Coordinator::Run(const std::atomic<bool>& stop) {
   s.PublishStatus(Clock::now());
   s.Flush(lock);
   s.LogSummary(Clock::now());
+  lock.unlock();
+  s.DrainWriters();
   return 0;
 }
 

@@ -45,6 +45,9 @@ class DdsWriter final : public RawWriter {
     return status.current_count;
   }
   uint64_t id() const override { return HandleId(writer_->get_instance_handle()); }
+  bool WaitForAcknowledgments(double timeout_s) override {
+    return writer_->wait_for_acknowledgments(eprosima::fastrtps::Duration_t(timeout_s)) == ReturnCode_t::RETCODE_OK;
+  }
 
  private:
   dds::Publisher* pub_;

@@ -1,10 +1,15 @@
 // In-memory Bus for tests: no network, samples copied between threads of one process.
-// Delivery is synchronous on the writer's thread. Transient-local topics replay the
+// Like DDS, delivery is asynchronous: each reader has its own dispatch thread, so a
+// callback may write (even to a topic it reads) without re-entering itself, and
+// samples from one writer arrive in order. Transient-local topics replay the
 // last `depth` samples of each live writer to a reader that joins late (per writer,
 // not per key: each service writes its own instance, so this matches DDS there).
 #include <algorithm>
 #include <atomic>
+#include <condition_variable>
 #include <deque>
+#include <thread>
+#include <variant>
 #include <map>
 #include <mutex>
 #include <vector>
@@ -14,13 +19,6 @@
 namespace lockstep {
 namespace {
 
-struct ReaderSlot {
-  std::mutex mu;
-  bool alive = true;
-  RawCallback on_sample;
-  LivelinessCallback on_liveliness;
-};
-
 struct Sample {
   const TypeOps* ops;
   void* data;
@@ -28,6 +26,62 @@ struct Sample {
   ~Sample() { ops->delete_sample(data); }
   Sample(const Sample&) = delete;
   Sample& operator=(const Sample&) = delete;
+};
+
+// One reader: a queue of deliveries and the thread that runs its callbacks.
+class ReaderSlot {
+ public:
+  ReaderSlot(RawCallback on_sample, LivelinessCallback on_liveliness)
+      : on_sample_(std::move(on_sample)), on_liveliness_(std::move(on_liveliness)), thread_([this] { Loop(); }) {}
+  ~ReaderSlot() {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      stop_ = true;
+    }
+    cv_.notify_one();
+    thread_.join();
+  }
+  void Deliver(std::shared_ptr<Sample> s, uint64_t writer) { Push(Item{std::move(s), LivelinessChange{writer, true}}); }
+  void WriterGone(uint64_t writer) {
+    if (on_liveliness_) Push(Item{nullptr, LivelinessChange{writer, false}});
+  }
+
+ private:
+  struct Item {
+    std::shared_ptr<Sample> sample;  // null: a liveliness change
+    LivelinessChange change;
+  };
+  void Push(Item item) {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      queue_.push_back(std::move(item));
+    }
+    cv_.notify_one();
+  }
+  void Loop() {
+    std::unique_lock<std::mutex> lock(mu_);
+    while (true) {
+      cv_.wait(lock, [&] { return stop_ || !queue_.empty(); });
+      if (stop_) return;
+      Item item = std::move(queue_.front());
+      queue_.pop_front();
+      lock.unlock();
+      if (item.sample) {
+        on_sample_(item.sample->data, SampleInfo{item.change.writer_id});
+      } else {
+        on_liveliness_(item.change);
+      }
+      lock.lock();
+    }
+  }
+
+  RawCallback on_sample_;
+  LivelinessCallback on_liveliness_;
+  std::mutex mu_;
+  std::condition_variable cv_;
+  std::deque<Item> queue_;
+  bool stop_ = false;
+  std::thread thread_;  // last: starts once the members above exist
 };
 
 struct TopicState {
@@ -76,23 +130,18 @@ class InProcWriter final : public RawWriter {
       --topic_->writers;
       topic_->history.erase(id_);
     }
-    for (auto& r : Snapshot(*topic_)) {
-      std::lock_guard<std::mutex> lock(r->mu);
-      if (r->alive && r->on_liveliness) r->on_liveliness(LivelinessChange{id_, false});
-    }
+    for (auto& r : Snapshot(*topic_)) r->WriterGone(id_);
   }
   void Write(const void* sample) override {
+    auto copy = std::make_shared<Sample>(&ops_, sample);
+    // Under the topic lock, so a reader joining now gets it either as history or live.
+    std::lock_guard<std::mutex> lock(topic_->mu);
     if (QosTransientLocal(qos_)) {
-      auto kept = std::make_shared<Sample>(&ops_, sample);
-      std::lock_guard<std::mutex> lock(topic_->mu);
       auto& h = topic_->history[id_];
-      h.push_back(std::move(kept));
+      h.push_back(copy);
       while (static_cast<int>(h.size()) > QosHistoryDepth(qos_)) h.pop_front();
     }
-    for (auto& r : Snapshot(*topic_)) {
-      std::lock_guard<std::mutex> lock(r->mu);
-      if (r->alive) r->on_sample(sample, SampleInfo{id_});
-    }
+    for (auto& r : topic_->readers) r->Deliver(copy, id_);
   }
   void AssertLiveliness() override {}
   int MatchedReaders() const override {
@@ -100,6 +149,7 @@ class InProcWriter final : public RawWriter {
     return static_cast<int>(topic_->readers.size());
   }
   uint64_t id() const override { return id_; }
+  bool WaitForAcknowledgments(double) override { return true; }  // queued deliveries are never lost
 
  private:
   std::shared_ptr<TopicState> topic_;
@@ -114,12 +164,11 @@ class InProcReader final : public RawReader {
       : topic_(std::move(topic)), slot_(std::move(slot)) {}
   ~InProcReader() override {
     {
-      std::lock_guard<std::mutex> lock(slot_->mu);
-      slot_->alive = false;
+      std::lock_guard<std::mutex> lock(topic_->mu);
+      auto& v = topic_->readers;
+      v.erase(std::remove(v.begin(), v.end(), slot_), v.end());
     }
-    std::lock_guard<std::mutex> lock(topic_->mu);
-    auto& v = topic_->readers;
-    v.erase(std::remove(v.begin(), v.end(), slot_), v.end());
+    slot_.reset();  // joins its thread: no callback runs after this
   }
   int MatchedWriters() const override {
     std::lock_guard<std::mutex> lock(topic_->mu);
@@ -139,22 +188,15 @@ class InProcessBus final : public Bus {
   std::unique_ptr<RawReader> CreateRawReader(const std::string& topic, const TypeOps& ops, QosKind qos,
                                              RawCallback on_sample, LivelinessCallback on_liveliness) override {
     auto t = registry_.Get(topic, ops);
-    auto slot = std::make_shared<ReaderSlot>();
-    slot->on_sample = std::move(on_sample);
-    slot->on_liveliness = std::move(on_liveliness);
-    std::vector<std::pair<uint64_t, std::shared_ptr<Sample>>> replay;
+    auto slot = std::make_shared<ReaderSlot>(std::move(on_sample), std::move(on_liveliness));
     {
       std::lock_guard<std::mutex> lock(t->mu);
-      t->readers.push_back(slot);
       if (QosTransientLocal(qos)) {
         for (auto& [writer, samples] : t->history) {
-          for (auto& s : samples) replay.emplace_back(writer, s);
+          for (auto& s : samples) slot->Deliver(s, writer);
         }
       }
-    }
-    for (auto& [writer, s] : replay) {
-      std::lock_guard<std::mutex> lock(slot->mu);
-      slot->on_sample(s->data, SampleInfo{writer});
+      t->readers.push_back(slot);
     }
     return std::make_unique<InProcReader>(std::move(t), std::move(slot));
   }

@@ -49,6 +49,9 @@ class RawWriter {
   virtual void AssertLiveliness() = 0;
   virtual int MatchedReaders() const = 0;
   virtual uint64_t id() const = 0;
+  // Blocks until every matched reliable reader acknowledged what was written, or the
+  // timeout passes; false on timeout. Call before exiting so last samples are not lost.
+  virtual bool WaitForAcknowledgments(double timeout_s) = 0;
 };
 
 class RawReader {
@@ -91,6 +94,7 @@ class Writer {
   void AssertLiveliness() { raw_->AssertLiveliness(); }
   int MatchedReaders() const { return raw_->MatchedReaders(); }
   uint64_t id() const { return raw_->id(); }
+  bool WaitForAcknowledgments(double timeout_s) { return raw_->WaitForAcknowledgments(timeout_s); }
   explicit operator bool() const { return raw_ != nullptr; }
 
  private:

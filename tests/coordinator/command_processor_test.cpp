@@ -1,0 +1,203 @@
+#include "lockstep/coordinator/command_processor.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+namespace lockstep {
+namespace {
+
+msg::Command Make(msg::CommandBody body, uint64_t seq = 1) {
+  msg::Command c;
+  c.client("test");
+  c.sequence_number(seq);
+  c.body(std::move(body));
+  return c;
+}
+
+msg::Command Spawn(const std::string& blueprint, std::vector<std::pair<std::string, std::string>> attrs = {}, uint32_t parent = 0) {
+  msg::SpawnActor s;
+  s.blueprint(blueprint);
+  std::vector<msg::BlueprintAttribute> list;
+  for (auto& [k, v] : attrs) {
+    msg::BlueprintAttribute a;
+    a.key(k);
+    a.value(v);
+    list.push_back(a);
+  }
+  s.attributes(list);
+  msg::Pose p;
+  p.orientation().w(1.0);
+  s.transform(p);
+  s.parent(parent);
+  msg::CommandBody b;
+  b.spawn_actor(s);
+  return Make(b);
+}
+
+msg::Command Control(uint32_t actor, float throttle, float steer) {
+  msg::VehicleControl v;
+  v.actor(actor);
+  v.throttle(throttle);
+  v.steer(steer);
+  msg::CommandBody b;
+  b.vehicle_control(v);
+  return Make(b);
+}
+
+class CommandProcessorTest : public ::testing::Test {
+ protected:
+  CommandProcessor p{BlueprintLibrary::Default()};
+  msg::CommandReply Submit(const msg::Command& c, bool sync = false) { return p.Submit(c, 1, 10, sync); }
+};
+
+TEST_F(CommandProcessorTest, SpawnAssignsIncreasingActorIds) {
+  auto a = Submit(Spawn("vehicle.lockstep.sedan"));
+  auto b = Submit(Spawn("drone.generic_quad"));
+  ASSERT_TRUE(a.accepted()) << a.reason();
+  ASSERT_TRUE(b.accepted()) << b.reason();
+  EXPECT_EQ(a.actor(), 1u);
+  EXPECT_EQ(b.actor(), 2u);
+  auto batch = p.TakePending();
+  ASSERT_EQ(batch.size(), 2u);
+  EXPECT_EQ(batch[0].body().spawn_actor().actor(), 1u) << "the tick carries the assigned id";
+  EXPECT_EQ(batch[1].body().spawn_actor().actor(), 2u);
+}
+
+TEST_F(CommandProcessorTest, UnknownBlueprintIsRejectedWithItsName) {
+  auto r = Submit(Spawn("vehicle.nonexistent.car"));
+  EXPECT_FALSE(r.accepted());
+  EXPECT_NE(r.reason().to_string().find("unknown blueprint 'vehicle.nonexistent.car'"), std::string::npos) << r.reason();
+  EXPECT_FALSE(p.HasPending());
+}
+
+TEST_F(CommandProcessorTest, AttributeOfWrongTypeIsRejected) {
+  auto r = Submit(Spawn("sensor.camera.rgb", {{"image_size_x", "wide"}}));
+  EXPECT_FALSE(r.accepted());
+  EXPECT_NE(r.reason().to_string().find("image_size_x"), std::string::npos) << r.reason();
+  EXPECT_NE(r.reason().to_string().find("integer"), std::string::npos) << r.reason();
+  auto f = Submit(Spawn("sensor.camera.rgb", {{"fov", "1e400"}}));
+  EXPECT_FALSE(f.accepted()) << "overflowing float";
+  auto rgb = Submit(Spawn("vehicle.lockstep.sedan", {{"color", "255,0"}}));
+  EXPECT_FALSE(rgb.accepted());
+  auto unknown = Submit(Spawn("vehicle.lockstep.sedan", {{"colour", "1,2,3"}}));
+  EXPECT_FALSE(unknown.accepted());
+  EXPECT_NE(unknown.reason().to_string().find("no attribute 'colour'"), std::string::npos) << unknown.reason();
+  auto ok = Submit(Spawn("vehicle.lockstep.sedan", {{"color", "255,0,10"}, {"role_name", "hero"}}));
+  EXPECT_TRUE(ok.accepted()) << ok.reason();
+}
+
+TEST_F(CommandProcessorTest, ControlOfUnknownActorIsRejected) {
+  auto r = Submit(Control(42, 0.5f, 0));
+  EXPECT_FALSE(r.accepted());
+  EXPECT_EQ(r.reason().to_string(), "unknown actor 42");
+}
+
+TEST_F(CommandProcessorTest, NanAndOutOfRangeControlsAreRejected) {
+  const uint32_t car = Submit(Spawn("vehicle.lockstep.sedan")).actor();
+  auto nan = Submit(Control(car, std::numeric_limits<float>::quiet_NaN(), 0));
+  EXPECT_FALSE(nan.accepted());
+  EXPECT_NE(nan.reason().to_string().find("throttle is NaN"), std::string::npos) << nan.reason();
+  auto range = Submit(Control(car, 0.5f, 1.5f));
+  EXPECT_FALSE(range.accepted());
+  EXPECT_NE(range.reason().to_string().find("steer"), std::string::npos);
+  EXPECT_TRUE(Submit(Control(car, 0.5f, -0.2f)).accepted());
+}
+
+TEST_F(CommandProcessorTest, ControlOfTheWrongKindOfActorIsRejected) {
+  const uint32_t drone = Submit(Spawn("drone.generic_quad")).actor();
+  auto r = Submit(Control(drone, 0.5f, 0));
+  EXPECT_FALSE(r.accepted());
+  EXPECT_NE(r.reason().to_string().find("is a drone"), std::string::npos) << r.reason();
+}
+
+TEST_F(CommandProcessorTest, DroneCommandsAreChecked) {
+  const uint32_t drone = Submit(Spawn("drone.generic_quad")).actor();
+  msg::DroneCommand d;
+  d.actor(drone);
+  d.kind(msg::DroneCommandKind::DRONE_MOVE_BY_MOTOR_PWMS);
+  d.values({0.5, 0.5, 1.5, 0.5});
+  msg::CommandBody b;
+  b.drone(d);
+  auto r = Submit(Make(b));
+  EXPECT_FALSE(r.accepted());
+  EXPECT_NE(r.reason().to_string().find("pwm"), std::string::npos) << r.reason();
+  d.kind(msg::DroneCommandKind::DRONE_MOVE_TO_POSITION);
+  d.values({});
+  d.velocity(5);
+  msg::Vector3 t;
+  t.x(std::nan(""));
+  d.target(t);
+  b.drone(d);
+  EXPECT_FALSE(Submit(Make(b)).accepted());
+  t.x(10);
+  d.target(t);
+  b.drone(d);
+  EXPECT_TRUE(Submit(Make(b)).accepted());
+}
+
+TEST_F(CommandProcessorTest, NonUnitQuaternionIsRejected) {
+  auto c = Spawn("vehicle.lockstep.sedan");
+  c.body().spawn_actor().transform().orientation().w(2.0);
+  auto r = Submit(c);
+  EXPECT_FALSE(r.accepted());
+  EXPECT_NE(r.reason().to_string().find("unit quaternion"), std::string::npos) << r.reason();
+}
+
+TEST_F(CommandProcessorTest, DestroyTakesAttachedSensorsAlong) {
+  const uint32_t car = Submit(Spawn("vehicle.lockstep.sedan")).actor();
+  const uint32_t cam = Submit(Spawn("sensor.camera.rgb", {}, car)).actor();
+  msg::DestroyActor d;
+  d.actor(car);
+  msg::CommandBody b;
+  b.destroy_actor(d);
+  EXPECT_TRUE(Submit(Make(b)).accepted());
+  EXPECT_EQ(p.actors().count(cam), 0u);
+  EXPECT_FALSE(Submit(Make(b)).accepted()) << "destroying twice";
+}
+
+TEST_F(CommandProcessorTest, TickRequestsNeedSynchronousMode) {
+  msg::TickRequest t;
+  t.count(3);
+  msg::CommandBody b;
+  b.tick_request(t);
+  auto free_running = Submit(Make(b), false);
+  EXPECT_FALSE(free_running.accepted());
+  EXPECT_NE(free_running.reason().to_string().find("synchronous_mode"), std::string::npos);
+  auto sync = Submit(Make(b), true);
+  EXPECT_TRUE(sync.accepted());
+  EXPECT_EQ(sync.frame(), 12u) << "next frame 10 plus two more";
+  EXPECT_FALSE(p.HasPending()) << "services never see tick requests";
+}
+
+TEST_F(CommandProcessorTest, AcceptedCommandsKeepAcceptanceOrder) {
+  std::vector<uint64_t> seqs;
+  const uint32_t car = Submit(Spawn("vehicle.lockstep.sedan")).actor();
+  p.TakePending();
+  for (uint64_t i = 0; i < 20; ++i) {
+    auto c = Control(car, 0.05f * static_cast<float>(i), 0);
+    c.sequence_number(100 + i);
+    if (i % 5 == 3) c.body().vehicle_control().brake(2.0f);  // rejected, must leave no gap
+    if (Submit(c).accepted()) seqs.push_back(100 + i);
+  }
+  auto batch = p.TakePending();
+  ASSERT_EQ(batch.size(), seqs.size());
+  for (size_t i = 0; i < batch.size(); ++i) EXPECT_EQ(batch[i].sequence_number(), seqs[i]);
+}
+
+TEST_F(CommandProcessorTest, BadWorldSettingsAreRejected) {
+  msg::WorldSettings s;
+  s.fixed_delta_seconds(-0.1);
+  s.max_substeps(10);
+  s.max_substep_delta_time(0.01);
+  s.service_timeout(1);
+  msg::CommandBody b;
+  b.world_settings(s);
+  auto r = Submit(Make(b));
+  EXPECT_FALSE(r.accepted());
+  EXPECT_NE(r.reason().to_string().find("fixed_delta_seconds"), std::string::npos) << r.reason();
+}
+
+}  // namespace
+}  // namespace lockstep

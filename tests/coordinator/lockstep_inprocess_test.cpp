@@ -1,0 +1,219 @@
+// The coordinator and several services in one process over the in-process bus: the
+// barrier's guarantees, command sequencing and rejection, synchronous mode, reset.
+#include <gtest/gtest.h>
+
+#include <limits>
+#include <map>
+#include <mutex>
+#include <thread>
+
+#include "lockstep/coordinator/coordinator.h"
+#include "lockstep/runtime/noop_core.h"
+#include "lockstep/runtime/service.h"
+#include "observer.h"
+
+namespace lockstep {
+namespace {
+
+using namespace std::chrono_literals;
+
+// Shared record of what every service did, checked on each step.
+struct Ledger {
+  std::mutex mu;
+  std::map<std::string, uint64_t> completed;                   // last frame stepped, per service
+  std::map<std::string, std::vector<std::vector<uint64_t>>> commands;  // per service: per frame, command seqs
+  std::vector<std::string> violations;
+};
+
+class RecordingCore : public NoopCore {
+ public:
+  RecordingCore(std::string name, Ledger& ledger, std::vector<std::string> all) : name_(std::move(name)), ledger_(ledger), all_(std::move(all)) {}
+  void Step(const msg::Tick& tick) override {
+    {
+      std::lock_guard<std::mutex> lock(ledger_.mu);
+      // Each service acks k only after its step k returns, so if the coordinator waited
+      // for every ack of k, every service has finished step k when any step k+1 begins.
+      for (const auto& other : all_) {
+        if (ledger_.completed[other] + 1 < tick.frame()) {
+          ledger_.violations.push_back(name_ + " got tick " + std::to_string(tick.frame()) + " while " + other +
+                                       " had finished only frame " + std::to_string(ledger_.completed[other]));
+        }
+      }
+      std::vector<uint64_t> seqs;
+      for (const auto& c : tick.commands()) seqs.push_back(c.sequence_number());
+      auto& frames = ledger_.commands[name_];
+      if (frames.size() < tick.frame()) frames.resize(tick.frame());
+      frames[tick.frame() - 1] = seqs;
+    }
+    NoopCore::Step(tick);
+    std::lock_guard<std::mutex> lock(ledger_.mu);
+    ledger_.completed[name_] = tick.frame();
+  }
+
+ private:
+  std::string name_;
+  Ledger& ledger_;
+  std::vector<std::string> all_;
+};
+
+class InProcessLockstep : public ::testing::Test {
+ protected:
+  void Start(LaunchConfig config) {
+    config.world.service_timeout(30);  // a loaded CI machine must not fault this test
+    bus_ = CreateInProcessBus();
+    observer_ = std::make_unique<testing::Observer>(*bus_);
+    coordinator_ = std::make_unique<Coordinator>(*bus_, config);
+    for (const auto& s : config.services) names_.push_back(s.name);
+    for (const auto& name : names_) {
+      cores_.push_back(std::make_unique<RecordingCore>(name, ledger_, names_));
+      runners_.push_back(std::make_unique<ServiceRunner>(*bus_, ServiceOptions{name, "recording", false}, *cores_.back()));
+    }
+    for (auto& r : runners_) threads_.emplace_back([&r, this] { r->Run(stop_); });
+    coordinator_thread_ = std::thread([this] { coordinator_->Run(stop_); });
+  }
+  void TearDown() override {
+    stop_ = true;
+    if (coordinator_thread_.joinable()) coordinator_thread_.join();
+    for (auto& t : threads_) {
+      if (t.joinable()) t.join();
+    }
+    runners_.clear();
+    coordinator_.reset();
+  }
+  static LaunchConfig Config(int services, bool sync) {
+    LaunchConfig c;
+    c.world = DefaultWorldSettings();
+    c.world.synchronous_mode(sync);
+    for (int i = 0; i < services; ++i) c.services.push_back({"svc" + std::to_string(i), "noop", "", {}, true, false, "never"});
+    return c;
+  }
+  uint32_t SpawnCar() {
+    msg::SpawnActor s;
+    s.blueprint("vehicle.lockstep.sedan");
+    s.transform().orientation().w(1);
+    msg::CommandBody b;
+    b.spawn_actor(s);
+    auto r = observer_->WaitReply(observer_->Send(b), 5s);
+    EXPECT_TRUE(r && r->accepted());
+    return r ? r->actor() : 0;
+  }
+  msg::CommandBody Throttle(uint32_t actor, float throttle) {
+    msg::VehicleControl v;
+    v.actor(actor);
+    v.throttle(throttle);
+    msg::CommandBody b;
+    b.vehicle_control(v);
+    return b;
+  }
+
+  Ledger ledger_;
+  std::unique_ptr<Bus> bus_;
+  std::unique_ptr<testing::Observer> observer_;
+  std::unique_ptr<Coordinator> coordinator_;
+  std::vector<std::string> names_;
+  std::vector<std::unique_ptr<RecordingCore>> cores_;
+  std::vector<std::unique_ptr<ServiceRunner>> runners_;
+  std::vector<std::thread> threads_;
+  std::thread coordinator_thread_;
+  std::atomic<bool> stop_{false};
+};
+
+TEST_F(InProcessLockstep, NoServiceSeesTickKPlusOneBeforeAllAckedK) {
+  auto config = Config(4, false);
+  config.ticks = 400;
+  Start(config);
+  ASSERT_TRUE(observer_->WaitUntil([&] { return observer_->last_frame() >= 400; }, 60s)) << "frame " << observer_->last_frame();
+  std::lock_guard<std::mutex> lock(ledger_.mu);
+  EXPECT_TRUE(ledger_.violations.empty()) << ledger_.violations.front();
+  for (const auto& name : names_) EXPECT_EQ(ledger_.completed[name], 400u) << name;
+}
+
+TEST_F(InProcessLockstep, CommandsReachEveryServiceInTheSameFrameAndOrder) {
+  Start(Config(3, false));
+  const uint32_t car = SpawnCar();
+  std::vector<uint64_t> sent;
+  for (int i = 0; i < 50; ++i) sent.push_back(observer_->Send(Throttle(car, 0.01f * static_cast<float>(i))));
+  for (uint64_t seq : sent) ASSERT_TRUE(observer_->WaitReply(seq, 10s)) << seq;
+  const uint64_t target = observer_->last_frame() + 3;
+  ASSERT_TRUE(observer_->WaitUntil([&] { return observer_->last_frame() >= target; }, 20s));
+  stop_ = true;
+  TearDown();
+  std::lock_guard<std::mutex> lock(ledger_.mu);
+  const auto& reference = ledger_.commands[names_[0]];
+  std::vector<uint64_t> seen;
+  for (const auto& frame : reference) seen.insert(seen.end(), frame.begin(), frame.end());
+  ASSERT_GE(seen.size(), sent.size() + 1);
+  EXPECT_EQ(std::vector<uint64_t>(seen.end() - static_cast<long>(sent.size()), seen.end()), sent) << "acceptance order";
+  for (const auto& name : names_) {
+    const auto& mine = ledger_.commands[name];
+    const size_t n = std::min(mine.size(), reference.size());
+    for (size_t f = 0; f < n; ++f) EXPECT_EQ(mine[f], reference[f]) << name << " frame " << f + 1;
+  }
+  // The state hashes (a chain over frames and commands) agree too.
+  for (size_t i = 1; i < cores_.size(); ++i) {
+    if (cores_[i]->frames() == cores_[0]->frames()) {
+      EXPECT_EQ(cores_[i]->StateHash(), cores_[0]->StateHash());
+    }
+  }
+}
+
+TEST_F(InProcessLockstep, BadCommandsAreRejectedWithAReasonAndTheRunGoesOn) {
+  Start(Config(2, false));
+  const uint32_t car = SpawnCar();
+  auto unknown = observer_->WaitReply(observer_->Send(Throttle(999, 0.5f)), 5s);
+  ASSERT_TRUE(unknown);
+  EXPECT_FALSE(unknown->accepted());
+  EXPECT_EQ(unknown->reason().to_string(), "unknown actor 999");
+  auto nan = observer_->WaitReply(observer_->Send(Throttle(car, std::numeric_limits<float>::quiet_NaN())), 5s);
+  ASSERT_TRUE(nan);
+  EXPECT_FALSE(nan->accepted());
+  EXPECT_NE(nan->reason().to_string().find("NaN"), std::string::npos);
+  msg::SpawnActor s;
+  s.blueprint("drone.imaginary");
+  s.transform().orientation().w(1);
+  msg::CommandBody b;
+  b.spawn_actor(s);
+  auto bp = observer_->WaitReply(observer_->Send(b), 5s);
+  ASSERT_TRUE(bp);
+  EXPECT_FALSE(bp->accepted());
+  EXPECT_NE(bp->reason().to_string().find("unknown blueprint"), std::string::npos);
+  const uint64_t now = observer_->last_frame();
+  EXPECT_TRUE(observer_->WaitUntil([&] { return observer_->last_frame() >= now + 20; }, 20s)) << "the run continues";
+  EXPECT_EQ(observer_->status()->state(), msg::RunState::RUN_RUNNING);
+}
+
+TEST_F(InProcessLockstep, SynchronousModeStepsExactlyTheTicksAskedFor) {
+  Start(Config(2, true));
+  ASSERT_TRUE(observer_->WaitUntil([&] { return observer_->status() && observer_->status()->state() == msg::RunState::RUN_READY; }, 10s));
+  EXPECT_EQ(observer_->last_frame(), 0u) << "no tick without a request";
+  msg::TickRequest t;
+  t.count(7);
+  msg::CommandBody b;
+  b.tick_request(t);
+  auto reply = observer_->WaitReply(observer_->Send(b), 5s);
+  ASSERT_TRUE(reply && reply->accepted()) << (reply ? reply->reason().to_string() : "no reply");
+  EXPECT_EQ(reply->frame(), 7u);
+  ASSERT_TRUE(observer_->WaitUntil([&] { return observer_->last_frame() == 7; }, 10s));
+  ASSERT_TRUE(observer_->WaitUntil([&] { return observer_->status()->state() == msg::RunState::RUN_READY; }, 10s));
+  EXPECT_EQ(observer_->last_frame(), 7u) << "and then it waits";
+  const auto frames = observer_->frames();
+  EXPECT_DOUBLE_EQ(frames.at(7).sim_time(), 7 * 0.05);
+}
+
+TEST_F(InProcessLockstep, ResetStartsANewRunFromFrameOne) {
+  Start(Config(2, false));
+  ASSERT_TRUE(observer_->WaitUntil([&] { return observer_->last_frame() >= 10; }, 10s));
+  msg::ResetWorld r;
+  r.seed(777);
+  msg::CommandBody b;
+  b.reset(r);
+  auto reply = observer_->WaitReply(observer_->Send(b), 5s);
+  ASSERT_TRUE(reply && reply->accepted());
+  EXPECT_EQ(reply->run(), 2u);
+  ASSERT_TRUE(observer_->WaitUntil([&] { return observer_->status() && observer_->status()->run() == 2 && observer_->status()->frame() >= 5; }, 10s));
+  // Every service restarted its hash chain from the new seed: they agree again.
+  EXPECT_TRUE(observer_->WaitUntil([&] { return ledger_.violations.empty(); }, 1s));
+}
+
+}  // namespace
+}  // namespace lockstep

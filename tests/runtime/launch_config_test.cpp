@@ -1,0 +1,82 @@
+#include "lockstep/runtime/launch_config.h"
+#include "lockstep/runtime/error.h"
+
+#include <gtest/gtest.h>
+
+namespace lockstep {
+namespace {
+
+std::string ErrorOf(const std::string& yaml) {
+  try {
+    ParseLaunchConfig(yaml, "test.yaml");
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(LaunchConfig, LoadsEveryKey) {
+  auto c = ParseLaunchConfig(R"(
+name: demo
+domain_id: 7
+seed: 9
+ticks: 100
+world:
+  synchronous_mode: true
+  fixed_delta_seconds: 0.02
+  perception_mode: pipelined
+services:
+  - {name: air, kind: air_sim, restart: on-failure}
+  - {name: cam, kind: render, required: false, perception: true, args: [--gpu, "0"]}
+)", "t.yaml");
+  EXPECT_EQ(c.name, "demo");
+  EXPECT_EQ(c.domain_id, 7);
+  EXPECT_EQ(c.seed, 9u);
+  EXPECT_TRUE(c.world.synchronous_mode());
+  EXPECT_DOUBLE_EQ(c.world.fixed_delta_seconds(), 0.02);
+  EXPECT_EQ(c.world.perception_mode(), msg::PerceptionMode::PERCEPTION_PIPELINED);
+  ASSERT_EQ(c.services.size(), 2u);
+  EXPECT_EQ(c.services[1].args, (std::vector<std::string>{"--gpu", "0"}));
+  EXPECT_EQ(c.RequiredServices(), std::vector<std::string>{"air"});
+}
+
+TEST(LaunchConfig, UnknownKeyIsNamedWithItsLine) {
+  const std::string e = ErrorOf("name: x\nworld:\n  fixed_delta_seconds: 0.05\n  fixed_delta_second: 0.1\n");
+  EXPECT_NE(e.find("test.yaml:4"), std::string::npos) << e;
+  EXPECT_NE(e.find("unknown key 'world.fixed_delta_second'"), std::string::npos) << e;
+}
+
+TEST(LaunchConfig, WrongTypeIsNamedWithItsLine) {
+  const std::string e = ErrorOf("seed: 1\nticks: many\n");
+  EXPECT_NE(e.find("test.yaml:2"), std::string::npos) << e;
+  EXPECT_NE(e.find("'ticks' expected an integer, got 'many'"), std::string::npos) << e;
+}
+
+TEST(LaunchConfig, BadServiceEntriesAreNamed) {
+  EXPECT_NE(ErrorOf("services:\n  - {kind: noop}\n").find("services[0].name' is required"), std::string::npos);
+  EXPECT_NE(ErrorOf("services:\n  - {name: a, kind: noop}\n  - {name: a, kind: noop}\n").find("'a' is used twice"),
+            std::string::npos);
+  EXPECT_NE(ErrorOf("services:\n  - {name: a, kind: noop, restart: always}\n").find("restart"), std::string::npos);
+  EXPECT_NE(ErrorOf("services: {name: a}\n").find("must be a list"), std::string::npos);
+}
+
+TEST(LaunchConfig, OutOfRangeWorldSettingsAreRejected) {
+  EXPECT_NE(ErrorOf("world:\n  fixed_delta_seconds: 0\n").find("fixed_delta_seconds must be in (0, 1]"), std::string::npos);
+  EXPECT_NE(ErrorOf("world:\n  perception_mode: lazy\n").find("'strict' or 'pipelined'"), std::string::npos);
+  EXPECT_NE(ErrorOf("domain_id: 300\n").find("domain_id"), std::string::npos);
+}
+
+TEST(LaunchConfig, SyntaxErrorNamesTheLine) {
+  const std::string e = ErrorOf("name: x\nworld: [1, 2\n");
+  EXPECT_NE(e.find("test.yaml:"), std::string::npos) << e;
+  EXPECT_NE(e.find("YAML syntax error"), std::string::npos) << e;
+}
+
+TEST(LaunchConfig, ShippedConfigsLoad) {
+  for (const char* f : {"default.yaml"}) {
+    EXPECT_NO_THROW(LoadLaunchConfig(std::string(LOCKSTEP_TEST_CONFIG_DIR) + "/" + f)) << f;
+  }
+}
+
+}  // namespace
+}  // namespace lockstep

@@ -1,0 +1,144 @@
+// Real processes over Fast DDS: a crashed (kill -9) or hung (SIGSTOP) service is noticed
+// within 1 s and named, the clock stops, and it resumes when a replacement joins; a late
+// joiner receives the current tick and world info; a malformed config names its key.
+#include <gtest/gtest.h>
+#include <signal.h>
+
+#include <chrono>
+#include <iostream>
+#include <condition_variable>
+#include <mutex>
+#include <optional>
+
+#include "lockstep/runtime/messages.h"
+#include "observer.h"
+#include "process.h"
+
+namespace lockstep::testing {
+namespace {
+
+using namespace std::chrono_literals;
+using Clock = std::chrono::steady_clock;
+const char* kProfile = "lockstep.participant.loopback";
+
+std::string Config(bool sync) {
+  return "domain_id: " + std::to_string(TestDomain()) +
+         "\nparticipant_profile: " + kProfile + "\nworld:\n  synchronous_mode: " + (sync ? "true" : "false") +
+         "\n  real_time_factor: 10\n  service_timeout: 5\nservices:\n  - {name: alpha, kind: noop}\n  - {name: beta, kind: noop}\n";
+}
+
+class FailureTest : public ::testing::Test {
+ protected:
+  void Start(bool sync) {
+    config_ = WriteTempFile("failure.yaml", Config(sync));
+    coordinator_ = std::make_unique<Process>(std::vector<std::string>{Bin("lockstep_coordinator"), config_});
+    alpha_ = StartService("alpha");
+    beta_ = StartService("beta");
+    bus_ = CreateDdsBus({TestDomain(), "", kProfile, "failure-test"});
+    observer_ = std::make_unique<Observer>(*bus_);
+  }
+  std::unique_ptr<Process> StartService(const std::string& name) {
+    return std::make_unique<Process>(std::vector<std::string>{Bin("lockstep_noop"), "--name", name, "--config", config_});
+  }
+  bool WaitState(msg::RunState state, std::chrono::milliseconds timeout) {
+    return observer_->WaitUntil([&] { return observer_->status() && observer_->status()->state() == state; }, timeout);
+  }
+  void TearDown() override {
+    if (HasFailure() && coordinator_) std::cerr << "coordinator output:\n" << coordinator_->Output();
+    observer_.reset();
+    bus_.reset();
+  }
+
+  std::string config_;
+  std::unique_ptr<Process> coordinator_, alpha_, beta_;
+  std::unique_ptr<Bus> bus_;
+  std::unique_ptr<Observer> observer_;
+};
+
+// Kills or stops `victim`, then measures how long until the run is faulted naming it.
+double DetectionSeconds(Observer& obs, Process& victim, int sig, const std::string& name) {
+  const auto t0 = Clock::now();
+  victim.Signal(sig);
+  const bool seen = obs.WaitUntil(
+      [&] {
+        auto s = obs.status();
+        return s && s->state() == msg::RunState::RUN_FAULTED && s->failed_service().to_string() == name;
+      },
+      5s);
+  return seen ? std::chrono::duration<double>(Clock::now() - t0).count() : 1e9;
+}
+
+TEST_F(FailureTest, CrashIsDetectedWithinOneSecondAndAReplacementResumes) {
+  Start(false);
+  ASSERT_TRUE(observer_->WaitUntil([&] { return observer_->last_frame() >= 20; }, 20s)) << "the run never started";
+  const double seconds = DetectionSeconds(*observer_, *beta_, SIGKILL, "beta");
+  std::cout << "crash detected and reported in " << seconds * 1000 << " ms\n";
+  EXPECT_LT(seconds, 1.0) << "crash detection took " << seconds << " s";
+  const auto status = observer_->status();
+  EXPECT_NE(status->reason().to_string().find("beta"), std::string::npos) << status->reason();
+  // The clock is stopped: no frame beyond the one in flight when beta died.
+  const uint64_t stopped_at = observer_->last_frame();
+  EXPECT_FALSE(observer_->WaitUntil([&] { return observer_->last_frame() > stopped_at + 1; }, 500ms));
+  beta_ = StartService("beta");
+  ASSERT_TRUE(WaitState(msg::RunState::RUN_RUNNING, 20s)) << "no resume after the replacement joined";
+  EXPECT_TRUE(observer_->WaitUntil([&] { return observer_->last_frame() >= stopped_at + 10; }, 20s));
+}
+
+TEST_F(FailureTest, HangIsDetectedWithinOneSecondAndRecovers) {
+  Start(false);
+  ASSERT_TRUE(observer_->WaitUntil([&] { return observer_->last_frame() >= 20; }, 20s)) << "the run never started";
+  const double seconds = DetectionSeconds(*observer_, *alpha_, SIGSTOP, "alpha");
+  std::cout << "hang detected and reported in " << seconds * 1000 << " ms\n";
+  EXPECT_LT(seconds, 1.0) << "hang detection took " << seconds << " s";
+  const uint64_t stopped_at = observer_->last_frame();
+  alpha_->Signal(SIGCONT);
+  ASSERT_TRUE(WaitState(msg::RunState::RUN_RUNNING, 20s));
+  EXPECT_TRUE(observer_->WaitUntil([&] { return observer_->last_frame() >= stopped_at + 10; }, 20s));
+}
+
+TEST_F(FailureTest, LateJoinerReceivesTheCurrentTickAndWorldInfo) {
+  Start(true);
+  ASSERT_TRUE(WaitState(msg::RunState::RUN_READY, 20s));
+  msg::TickRequest t;
+  t.count(5);
+  msg::CommandBody body;
+  body.tick_request(t);
+  auto reply = observer_->WaitReply(observer_->Send(body), 10s);
+  ASSERT_TRUE(reply && reply->accepted());
+  ASSERT_TRUE(observer_->WaitUntil([&] { return observer_->last_frame() == 5; }, 20s));
+  // A participant that joins now gets the current tick and the world from history.
+  auto late = CreateDdsBus({TestDomain(), "", kProfile, "late-joiner"});
+  std::mutex mu;
+  std::condition_variable cv;
+  std::optional<msg::Tick> tick;
+  std::optional<msg::WorldInfo> world;
+  Reader<msg::Tick> tr(*late, topics::kTick, [&](const msg::Tick& s, const SampleInfo&) {
+    std::lock_guard<std::mutex> lock(mu);
+    tick = s;
+    cv.notify_all();
+  });
+  Reader<msg::WorldInfo> wr(*late, topics::kWorldInfo, [&](const msg::WorldInfo& s, const SampleInfo&) {
+    std::lock_guard<std::mutex> lock(mu);
+    world = s;
+    cv.notify_all();
+  });
+  std::unique_lock<std::mutex> lock(mu);
+  ASSERT_TRUE(cv.wait_for(lock, 10s, [&] { return tick && world; }));
+  EXPECT_EQ(tick->frame(), 5u);
+  EXPECT_EQ(world->run(), 1u);
+  EXPECT_TRUE(world->settings().synchronous_mode());
+  EXPECT_EQ(world->required_services().size(), 2u);
+}
+
+TEST(ConfigErrors, CoordinatorNamesTheBadKeyAndExits) {
+  const std::string config = WriteTempFile("bad.yaml", "domain_id: 3\nworld:\n  fixed_delta_secs: 0.05\n");
+  Process coordinator({Bin("lockstep_coordinator"), config});
+  auto code = coordinator.Wait(10s);
+  ASSERT_TRUE(code) << "it must exit, not hang";
+  EXPECT_EQ(*code, 2);
+  EXPECT_NE(coordinator.Output().find("bad.yaml:3: unknown key 'world.fixed_delta_secs'"), std::string::npos)
+      << coordinator.Output();
+}
+
+}  // namespace
+}  // namespace lockstep::testing

@@ -281,6 +281,11 @@ LaneChange Map::AllowedLaneChange(const Waypoint& wp) const {
   return static_cast<LaneChange>(bits);
 }
 
+double Map::SpeedLimitAt(const Eigen::Vector3d& p, double fallback) const {
+  const auto wp = NearestWaypoint(p, true, LaneType::Driving);
+  return wp ? SpeedLimit(*wp, fallback) : fallback;
+}
+
 double Map::SpeedLimit(const Waypoint& wp, double fallback) const {
   if (wp.road < 0) return fallback;
   const Road& r = data_.roads[static_cast<std::size_t>(wp.road)];

@@ -161,6 +161,8 @@ TEST(map_invasion, LaneChangePermissionFromMarks) {
   EXPECT_NEAR(m.SpeedLimit(*m.NearestWaypoint({60, -1.75, 0})), 30 / 3.6, 1e-9);
   EXPECT_NEAR(m.SpeedLimit(w1), 50 / 3.6, 1e-9);
   EXPECT_NEAR(m.SpeedLimit(w3), 50 / 3.6, 1e-9);  // sign serves the other direction
+  EXPECT_NEAR(m.SpeedLimitAt({70, -2.0, 0}), 30 / 3.6, 1e-9);
+  EXPECT_NEAR(m.SpeedLimitAt({10, -2.0, 0}), 50 / 3.6, 1e-9);
   // Sidewalk query with a lane type mask.
   EXPECT_EQ(m.NearestWaypoint({40, -20, 0}, true, LaneType::Sidewalk)->lane, -3);
   EXPECT_FALSE(m.NearestWaypoint({40, -20, 0}, false, LaneType::Any));

@@ -92,6 +92,8 @@ class Map {
   // Speed limit (m/s) for a waypoint: last speed-limit sign passed on its road in its
   // travel direction, else the lane's <speed>, else the road type's, else `fallback`.
   double SpeedLimit(const Waypoint& wp, double fallback = 30.0 / 3.6) const;
+  // Speed limit (m/s) at a location: that of the nearest driving lane, heading-blind.
+  double SpeedLimitAt(const Eigen::Vector3d& p, double fallback = 30.0 / 3.6) const;
 
   // Axis-aligned bounds of all roads (m).
   Eigen::Vector2d BoundsMin() const { return bounds_min_; }

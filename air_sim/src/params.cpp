@@ -101,24 +101,27 @@ Vec3 YamlVec3(const YAML::Node& key, const YAML::Node& value, const std::string&
 void LoadMap(const YAML::Node& map, const std::string& prefix, std::vector<Field>& fields,
              MultirotorParams& p) {
   for (auto it = map.begin(); it != map.end(); ++it) {
-    const YAML::Node& k = it->first;
-    const YAML::Node& v = it->second;
+    // Copies: the iterator's pair is a temporary proxy (a reference would dangle).
+    const YAML::Node k = it->first;
+    const YAML::Node v = it->second;
     if (!k.IsScalar()) YamlError(k, "keys must be strings");
     const std::string name = prefix + k.Scalar();
     if (name == "contact_spheres") {
       if (!v.IsSequence()) YamlError(k, "key 'contact_spheres': expected a sequence");
       p.contact_spheres.clear();
-      for (const YAML::Node& s : v) {
+      for (const YAML::Node& s : v) {  // binds the temporary (lifetime extended)
         if (!s.IsMap()) YamlError(s, "contact_spheres: each entry is {center: [x,y,z], radius: r}");
         ContactSphere cs;
         for (auto jt = s.begin(); jt != s.end(); ++jt) {
-          const std::string sk = jt->first.Scalar();
+          const YAML::Node sk_node = jt->first;
+          const YAML::Node sv = jt->second;
+          const std::string sk = sk_node.Scalar();
           if (sk == "center") {
-            cs.center = YamlVec3(jt->first, jt->second, "contact_spheres.center");
+            cs.center = YamlVec3(sk_node, sv, "contact_spheres.center");
           } else if (sk == "radius") {
-            cs.radius = YamlDouble(jt->first, jt->second, "contact_spheres.radius");
+            cs.radius = YamlDouble(sk_node, sv, "contact_spheres.radius");
           } else {
-            YamlError(jt->first, "unknown key 'contact_spheres." + sk + "'");
+            YamlError(sk_node, "unknown key 'contact_spheres." + sk + "'");
           }
         }
         p.contact_spheres.push_back(cs);

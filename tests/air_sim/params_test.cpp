@@ -86,6 +86,20 @@ TEST(air_params, YamlLoadsNestedAndDottedKeys) {
   EXPECT_DOUBLE_EQ(p.arm_length, 0.2275);  // untouched default
 }
 
+TEST(air_params, YamlContactSpheres) {
+  const MultirotorParams p = LoadParamsYaml(
+      "contact_spheres:\n"
+      "  - {center: [0, 0, -0.05], radius: 0.1}\n"
+      "  - {center: [0.2, 0, 0], radius: 0.03}\n");
+  ASSERT_EQ(p.contact_spheres.size(), 2u);
+  EXPECT_DOUBLE_EQ(p.contact_spheres[0].center.z(), -0.05);
+  EXPECT_DOUBLE_EQ(p.contact_spheres[1].radius, 0.03);
+  EXPECT_NEAR(RestHeight(DeriveParams(p)), 0.15, 1e-12);
+  const std::string e = ErrorOf([] { LoadParamsYaml("contact_spheres:\n  - {center: [0, 0, 0], radus: 1}\n"); });
+  EXPECT_NE(e.find("line 2"), std::string::npos) << e;
+  EXPECT_NE(e.find("contact_spheres.radus"), std::string::npos) << e;
+}
+
 TEST(air_params, YamlUnknownKeyNamedWithLine) {
   const std::string e = ErrorOf([] { LoadParamsYaml("mass: 1.2\n\nmasss: 3\n"); });
   EXPECT_NE(e.find("line 3"), std::string::npos) << e;

@@ -1,0 +1,46 @@
+#pragma once
+// The air_sim service core: turns the tick's commands into air::Commands, steps the
+// multirotor world (air::Step) and publishes AirState and events stamped with the frame.
+#include <memory>
+#include <optional>
+#include <set>
+#include <string>
+
+#include "lockstep/air/air.h"
+#include "lockstep/runtime/frame_buffer.h"
+#include "lockstep/runtime/service.h"
+
+namespace lockstep {
+
+class AirService final : public ServiceCore {
+ public:
+  explicit AirService(Bus& bus, std::string name = "air_sim");
+  void BeginRun(const msg::WorldInfo& world) override;
+  void Step(const msg::Tick& tick) override;
+  uint64_t StateHash() const override { return air::StateHash(state_); }
+
+  const air::World& model() const { return model_; }
+  const air::WorldState& state() const { return state_; }
+
+ private:
+  void Apply(const msg::Command& c, uint64_t frame, air::Commands* out);
+  void Fail(const msg::FrameStamp& stamp, uint32_t actor, const std::string& why);
+  air::Environment Environment(const msg::Tick& tick);
+  msg::AirState Publish(const msg::FrameStamp& stamp) const;
+
+  std::string name_;
+  Writer<msg::AirState> state_writer_;
+  Writer<msg::SimEvent> event_writer_;
+  FrameBuffer<msg::GroundState> ground_;
+  bool wait_for_ground_ = false;  // a ground_sim is in the run: use its vehicles (Jacobi, frame k-1)
+  air::World model_;
+  air::WorldState state_;
+  std::map<uint32_t, std::string> blueprints_;
+  std::map<uint32_t, std::pair<uint64_t, msg::DroneCommandStatus>> last_command_;  // per drone
+  std::vector<msg::SimEvent> pending_events_;
+};
+
+// DroneCommand (wire) -> air command body; empty optional with `why` set if it cannot map.
+std::optional<air::CommandBody> ToAirCommand(const msg::DroneCommand& d, std::string* why);
+
+}  // namespace lockstep

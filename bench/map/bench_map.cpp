@@ -33,7 +33,7 @@ double Percentile(std::vector<double> v, double p) {
 
 struct Result {
   std::string town;
-  double parse_ms, nearest_us, nearest_p99_us, gen_ms, route_ms;
+  double parse_ms, nearest_us, nearest_p99_us, gen_ms, route_ms, scene_ms, meshes_ms;
   std::size_t waypoints, triangles;
 };
 
@@ -84,7 +84,12 @@ Result Run(const std::string& town, const std::string& xodr_text) {
     if (rt) sink += rt->length_m;
   }
   r.route_ms = Median(route);
-  r.triangles = lm::TotalTriangles(lm::BuildWorldMeshes(map, lm::GenerateScene(map, 0)));
+  auto t0 = Clock::now();
+  const lm::Scene scene = lm::GenerateScene(map, 0);
+  r.scene_ms = Ms(Clock::now() - t0);
+  t0 = Clock::now();
+  r.triangles = lm::TotalTriangles(lm::BuildWorldMeshes(map, scene));
+  r.meshes_ms = Ms(Clock::now() - t0);
   if (sink == 42.0) std::puts("");  // keep the work observable
   return r;
 }
@@ -98,8 +103,9 @@ void Print(const Result& r, bool summary) {
   }
   std::printf("{\"bench\":\"map\",\"town\":\"%s\",\"parse_ms\":%.3f,\"nearest_waypoint_us\":%.3f,"
               "\"nearest_waypoint_p99_us\":%.3f,\"generate_waypoints_2m_ms\":%.3f,\"waypoints_2m\":%zu,"
-              "\"route_ms\":%.3f,\"world_triangles\":%zu}\n",
-              r.town.c_str(), r.parse_ms, r.nearest_us, r.nearest_p99_us, r.gen_ms, r.waypoints, r.route_ms, r.triangles);
+              "\"route_ms\":%.3f,\"scene_ms\":%.3f,\"world_meshes_ms\":%.3f,\"world_triangles\":%zu}\n",
+              r.town.c_str(), r.parse_ms, r.nearest_us, r.nearest_p99_us, r.gen_ms, r.waypoints, r.route_ms, r.scene_ms,
+              r.meshes_ms, r.triangles);
 }
 
 std::string Slurp(const std::string& path) {

@@ -1,5 +1,7 @@
 #include "lockstep/coordinator/blueprints.h"
 
+#include "lockstep/air/params.h"
+
 #include <algorithm>
 #include <charconv>
 #include <cmath>
@@ -44,14 +46,20 @@ std::vector<AttributeDef> CameraAttributes() {
                          Attr("fov", T::kFloat, "90", 1, 179), Attr("sensor_tick", T::kFloat, "0", 0, 3600)});
 }
 
+// Every multirotor parameter air_sim accepts (air::VisitParams), so a spawn request is
+// checked here against exactly what the service will build.
 std::vector<AttributeDef> DroneAttributes(const std::string& frame) {
-  return With(Common(), {Choice("frame", frame, {"quad_x", "quad_plus", "hexa_x"}), Attr("mass", T::kFloat, "1.0", 0.05, 100),
-                         Attr("arm_length", T::kFloat, "0.2275", 0.02, 5), Attr("max_rpm", T::kFloat, "6396.667", 100, 100000),
-                         Attr("propeller_diameter", T::kFloat, "0.2286", 0.01, 3),
-                         Attr("motor_time_constant", T::kFloat, "0.005", 0.0001, 1),
-                         Attr("linear_drag_coefficient", T::kFloat, "0.325", 0, 10),
-                         Attr("angular_drag_coefficient", T::kFloat, "0.325", 0, 10),
-                         Attr("takeoff_height", T::kFloat, "2.0", 0.1, 100)});
+  std::vector<AttributeDef> v = Common();
+  air::MultirotorParams p;
+  struct Visitor {
+    std::vector<AttributeDef>* out;
+    std::string frame;
+    void operator()(const char* key, double& x) const { out->push_back(Attr(key, T::kFloat, std::to_string(x), 0, 1e9)); }
+    void operator()(const char* key, air::Vec3&) const { out->push_back(Attr(key, T::kString, "")); }
+    void operator()(const char*, air::FrameType&) const { out->push_back(Choice("frame", frame, {"quad_x", "quad_plus", "hexa_x"})); }
+  };
+  air::VisitParams(p, Visitor{&v, frame});
+  return v;
 }
 
 bool ParseNumber(const std::string& s, double* out) {

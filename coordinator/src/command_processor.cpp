@@ -1,8 +1,10 @@
 #include "lockstep/coordinator/command_processor.h"
 
 #include <cmath>
+#include <map>
 #include <sstream>
 
+#include "lockstep/air/params.h"
 #include "lockstep/runtime/launch_config.h"
 
 namespace lockstep {
@@ -42,6 +44,23 @@ std::string First(S&&... reasons) {
   std::string out;
   ((out.empty() ? (void)(out = reasons) : (void)0), ...);
   return out;
+}
+
+// Builds the drone's parameters as air_sim will, so a bad combination (a vector that
+// does not parse, a negative inertia) is rejected here and not inside the service.
+std::string CheckDroneParams(const std::string& blueprint, const std::vector<msg::BlueprintAttribute>& attributes) {
+  std::map<std::string, std::string> attrs;
+  for (const auto& a : attributes) {
+    if (a.key().to_string() != "role_name") attrs[a.key().to_string()] = a.value().to_string();
+  }
+  if (blueprint == "drone.quad_plus" && !attrs.count("frame")) attrs["frame"] = "quad_plus";
+  if (blueprint == "drone.hexa_x" && !attrs.count("frame")) attrs["frame"] = "hexa_x";
+  try {
+    const std::string why = air::ValidateParams(air::ParamsFromAttributes(attrs));
+    return why.empty() ? why : "drone parameters: " + why;
+  } catch (const std::exception& e) {
+    return std::string("drone parameters: ") + e.what();
+  }
 }
 
 }  // namespace
@@ -133,6 +152,9 @@ std::string CommandProcessor::Check(const msg::Command& cmd, bool synchronous) c
       const Blueprint* bp = library_.Find(s.blueprint().to_string());
       if (!bp) return "unknown blueprint '" + s.blueprint().to_string() + "'";
       if (auto r = library_.Check(*bp, s.attributes()); !r.empty()) return r;
+      if (bp->kind == ActorKind::kDrone) {
+        if (auto r = CheckDroneParams(bp->id, s.attributes()); !r.empty()) return r;
+      }
       if (auto r = CheckPose(s.transform(), "spawn transform"); !r.empty()) return r;
       if (s.parent() != 0 && !actors_.count(s.parent())) return "unknown parent actor " + std::to_string(s.parent());
       return {};

@@ -1,0 +1,355 @@
+#include "air_service.h"
+
+#include <sstream>
+
+#include "lockstep/runtime/log.h"
+
+namespace lockstep {
+namespace {
+
+air::Vec3 ToVec(const msg::Vector3& v) { return {v.x(), v.y(), v.z()}; }
+msg::Vector3 FromVec(const air::Vec3& v) {
+  msg::Vector3 m;
+  m.x(v.x());
+  m.y(v.y());
+  m.z(v.z());
+  return m;
+}
+air::Pose ToPose(const msg::Pose& p) {
+  air::Pose out;
+  out.position = ToVec(p.position());
+  out.orientation = air::Quat(p.orientation().w(), p.orientation().x(), p.orientation().y(), p.orientation().z()).normalized();
+  return out;
+}
+msg::Pose FromPose(const air::Pose& p) {
+  msg::Pose out;
+  out.position(FromVec(p.position));
+  out.orientation().w(p.orientation.w());
+  out.orientation().x(p.orientation.x());
+  out.orientation().y(p.orientation.y());
+  out.orientation().z(p.orientation.z());
+  return out;
+}
+double Timeout(double t) { return t > 0 ? t : air::kForever; }
+air::YawMode Yaw(const msg::YawMode& y) { return air::YawMode{y.is_rate(), y.value()}; }
+air::Drivetrain Drive(msg::Drivetrain d) {
+  return d == msg::Drivetrain::DRIVETRAIN_FORWARD_ONLY ? air::Drivetrain::kForwardOnly : air::Drivetrain::kMaxDegreeOfFreedom;
+}
+msg::DroneCommandStatus ToWire(air::CommandStatus s) {
+  switch (s) {
+    case air::CommandStatus::kRunning: return msg::DroneCommandStatus::DRONE_CMD_RUNNING;
+    case air::CommandStatus::kCompleted: return msg::DroneCommandStatus::DRONE_CMD_COMPLETED;
+    case air::CommandStatus::kTimedOut: return msg::DroneCommandStatus::DRONE_CMD_TIMED_OUT;
+    case air::CommandStatus::kCancelled: return msg::DroneCommandStatus::DRONE_CMD_CANCELLED;
+    case air::CommandStatus::kRejected: return msg::DroneCommandStatus::DRONE_CMD_REJECTED;
+  }
+  return msg::DroneCommandStatus::DRONE_CMD_NONE;
+}
+msg::ObjectKind ToWire(air::ObjectKind k) {
+  switch (k) {
+    case air::ObjectKind::kNone: return msg::ObjectKind::OBJECT_NONE;
+    case air::ObjectKind::kGround: return msg::ObjectKind::OBJECT_GROUND;
+    case air::ObjectKind::kStatic: return msg::ObjectKind::OBJECT_STATIC;
+    case air::ObjectKind::kVehicle: return msg::ObjectKind::OBJECT_VEHICLE;
+    case air::ObjectKind::kDrone: return msg::ObjectKind::OBJECT_DRONE;
+  }
+  return msg::ObjectKind::OBJECT_NONE;
+}
+bool IsDroneBlueprint(const std::string& bp) { return bp.rfind("drone.", 0) == 0; }
+
+}  // namespace
+
+std::optional<air::CommandBody> ToAirCommand(const msg::DroneCommand& d, std::string* why) {
+  using K = msg::DroneCommandKind;
+  const auto& v = d.values();
+  auto need = [&](size_t n) {
+    if (v.size() >= n) return true;
+    *why = "needs " + std::to_string(n) + " values, got " + std::to_string(v.size());
+    return false;
+  };
+  switch (d.kind()) {
+    case K::DRONE_ARM: return air::cmd::Arm{};
+    case K::DRONE_DISARM: return air::cmd::Disarm{};
+    case K::DRONE_TAKEOFF: return air::cmd::Takeoff{v.empty() ? 0.0 : v[0], d.timeout() > 0 ? d.timeout() : 20.0};
+    case K::DRONE_LAND: return air::cmd::Land{d.timeout() > 0 ? d.timeout() : 60.0};
+    case K::DRONE_HOVER:
+    case K::DRONE_CANCEL: return air::cmd::Hover{};
+    case K::DRONE_GO_HOME: return air::cmd::GoHome{d.velocity(), Timeout(d.timeout())};
+    case K::DRONE_MOVE_TO_POSITION: {
+      air::cmd::MoveToPosition m;
+      m.position = ToVec(d.target());
+      m.velocity = d.velocity();
+      m.timeout = Timeout(d.timeout());
+      m.drivetrain = Drive(d.drivetrain());
+      m.yaw_mode = Yaw(d.yaw());
+      m.lookahead = d.lookahead() > 0 ? d.lookahead() : -1;
+      return m;
+    }
+    case K::DRONE_MOVE_ON_PATH: {
+      air::cmd::MoveOnPath m;
+      for (const auto& p : d.path()) m.path.push_back(ToVec(p));
+      m.velocity = d.velocity();
+      m.timeout = Timeout(d.timeout());
+      m.drivetrain = Drive(d.drivetrain());
+      m.yaw_mode = Yaw(d.yaw());
+      m.lookahead = d.lookahead() > 0 ? d.lookahead() : -1;
+      return m;
+    }
+    case K::DRONE_TRACK_TARGET: {
+      if (!need(3)) return std::nullopt;
+      air::cmd::TrackTarget t;
+      t.position = ToVec(d.target());
+      t.velocity = air::Vec3(v[0], v[1], v[2]);
+      t.max_speed = d.velocity();
+      t.duration = d.duration() > 0 ? d.duration() : 1.0;
+      t.yaw_mode = Yaw(d.yaw());
+      return t;
+    }
+    case K::DRONE_MOVE_BY_VELOCITY:
+      return air::cmd::MoveByVelocity{ToVec(d.target()), d.duration(),
+                                      d.body_frame() ? air::VelocityFrame::kBody : air::VelocityFrame::kWorld,
+                                      Drive(d.drivetrain()), Yaw(d.yaw())};
+    case K::DRONE_MOVE_BY_VELOCITY_Z:
+      return air::cmd::MoveByVelocityZ{d.target().x(), d.target().y(), d.target().z(), d.duration(),
+                                       d.body_frame() ? air::VelocityFrame::kBody : air::VelocityFrame::kWorld,
+                                       Drive(d.drivetrain()), Yaw(d.yaw())};
+    case K::DRONE_MOVE_BY_ROLL_PITCH_YAW_THROTTLE:
+      if (!need(4)) return std::nullopt;
+      return air::cmd::MoveByRollPitchYawThrottle{v[0], v[1], v[2], v[3], d.duration()};
+    case K::DRONE_MOVE_BY_ROLL_PITCH_YAW_Z:
+      if (!need(4)) return std::nullopt;
+      return air::cmd::MoveByRollPitchYawZ{v[0], v[1], v[2], v[3], d.duration()};
+    case K::DRONE_MOVE_BY_ANGLE_RATES_THROTTLE:
+      if (!need(4)) return std::nullopt;
+      return air::cmd::MoveByAngleRatesThrottle{air::Vec3(v[0], v[1], v[2]), v[3], d.duration()};
+    case K::DRONE_MOVE_BY_MOTOR_PWMS:
+      return air::cmd::MoveByMotorPwms{std::vector<double>(v.begin(), v.end()), d.duration()};
+    case K::DRONE_ROTATE_TO_YAW: {
+      air::cmd::RotateToYaw r;
+      r.yaw = d.yaw().value();
+      r.timeout = Timeout(d.timeout());
+      if (d.margin() > 0) r.margin = d.margin();
+      return r;
+    }
+    case K::DRONE_ROTATE_BY_YAW_RATE: return air::cmd::RotateByYawRate{d.yaw().value(), d.duration()};
+    case K::DRONE_SET_GAINS: {
+      // Only the loop named changes; the service fills in the rest from the drone's gains.
+      *why = "set_gains is mapped by the service";
+      return std::nullopt;
+    }
+  }
+  *why = "unknown drone command kind";
+  return std::nullopt;
+}
+
+AirService::AirService(Bus& bus, std::string name)
+    : name_(std::move(name)),
+      state_writer_(bus, topics::kAirState),
+      event_writer_(bus, topics::kEvent),
+      ground_(bus, topics::kGroundState) {}
+
+void AirService::BeginRun(const msg::WorldInfo& world) {
+  model_ = air::World{};
+  model_.seed = world.seed();
+  state_ = air::MakeState(model_);
+  blueprints_.clear();
+  last_command_.clear();
+  wait_for_ground_ = false;
+  for (const auto& s : world.required_services()) {
+    if (s.to_string() == "ground_sim") wait_for_ground_ = true;
+  }
+  spdlog::info("run {}: seed {}, vehicles {}", world.run(), world.seed(),
+               wait_for_ground_ ? "from ground_sim (frame k-1)" : "none (no ground_sim in the run)");
+}
+
+void AirService::Fail(const msg::FrameStamp& stamp, uint32_t actor, const std::string& why) {
+  msg::SimEvent e;
+  e.stamp(stamp);
+  e.service(name_);
+  e.kind(msg::EventKind::EVENT_COMMAND_FAILED);
+  e.actor(actor);
+  e.message(why.substr(0, 511));
+  pending_events_.push_back(e);
+  spdlog::warn("actor {}: {}", actor, why);
+}
+
+void AirService::Apply(const msg::Command& c, uint64_t frame, air::Commands* out) {
+  msg::FrameStamp stamp;
+  stamp.run(0);
+  stamp.frame(frame);
+  const auto& b = c.body();
+  switch (b._d()) {
+    case msg::CommandKind::CMD_SPAWN_ACTOR: {
+      const auto& s = b.spawn_actor();
+      const std::string bp = s.blueprint().to_string();
+      if (!IsDroneBlueprint(bp)) return;
+      std::map<std::string, std::string> attrs;
+      for (const auto& a : s.attributes()) {
+        if (a.key().to_string() != "role_name") attrs[a.key().to_string()] = a.value().to_string();
+      }
+      if (bp == "drone.quad_plus" && !attrs.count("frame")) attrs["frame"] = "quad_plus";
+      if (bp == "drone.hexa_x" && !attrs.count("frame")) attrs["frame"] = "hexa_x";
+      try {
+        air::AddDrone(&model_, &state_, s.actor(), air::ParamsFromAttributes(attrs), ToPose(s.transform()));
+        blueprints_[s.actor()] = bp;
+      } catch (const std::exception& e) {
+        Fail(stamp, s.actor(), std::string("spawn failed: ") + e.what());
+      }
+      return;
+    }
+    case msg::CommandKind::CMD_DESTROY_ACTOR:
+      if (air::RemoveDrone(&model_, &state_, b.destroy_actor().actor())) {
+        blueprints_.erase(b.destroy_actor().actor());
+        last_command_.erase(b.destroy_actor().actor());
+      }
+      return;
+    case msg::CommandKind::CMD_SET_TRANSFORM:
+      if (model_.Find(b.set_transform().actor())) {
+        out->push_back(air::Command{0, b.set_transform().actor(), air::cmd::SetPose{ToPose(b.set_transform().transform())}});
+      }
+      return;
+    case msg::CommandKind::CMD_DRONE: {
+      const auto& d = b.drone();
+      if (!model_.Find(d.actor())) return;  // coordinator checked the id; a failed spawn leaves it unknown
+      std::string why;
+      std::optional<air::CommandBody> body;
+      if (d.kind() == msg::DroneCommandKind::DRONE_SET_GAINS) {
+        air::ControllerGains g = state_.Find(d.actor())->controller.gains;
+        const auto& w = d.gains();
+        switch (d.gains_loop()) {
+          case msg::GainsLoop::GAINS_ANGLE_RATE:
+            g.angle_rate_p = ToVec(w.kp());
+            g.angle_rate_i = ToVec(w.ki());
+            g.angle_rate_d = ToVec(w.kd());
+            break;
+          case msg::GainsLoop::GAINS_ANGLE_LEVEL: g.angle_level_p = ToVec(w.kp()); break;
+          case msg::GainsLoop::GAINS_VELOCITY:
+            g.velocity_p_xy = w.kp().x();
+            g.velocity_p_z = w.kp().z();
+            g.velocity_i_xy = w.ki().x();
+            g.velocity_i_z = w.ki().z();
+            break;
+          case msg::GainsLoop::GAINS_POSITION:
+            g.position_p_xy = w.kp().x();
+            g.position_p_z = w.kp().z();
+            break;
+        }
+        body = air::cmd::SetGains{g};
+      } else {
+        body = ToAirCommand(d, &why);
+      }
+      if (!body) {
+        Fail(stamp, d.actor(), why);
+        last_command_[d.actor()] = {d.command_id(), msg::DroneCommandStatus::DRONE_CMD_REJECTED};
+        return;
+      }
+      out->push_back(air::Command{d.command_id(), d.actor(), std::move(*body)});
+      return;
+    }
+    default:
+      return;
+  }
+}
+
+air::Environment AirService::Environment(const msg::Tick& tick) {
+  air::Environment env;
+  if (!wait_for_ground_ || tick.frame() < 2) return env;
+  // Jacobi coupling: the vehicles of frame k-1 while stepping to frame k.
+  auto ground = ground_.WaitFor(tick.run(), tick.frame() - 1, std::chrono::seconds(10));
+  if (!ground) {
+    spdlog::error("no GroundState of frame {} within 10 s: stepping without vehicles", tick.frame() - 1);
+    return env;
+  }
+  for (const auto& v : ground->vehicles()) {
+    air::VehicleBox box;
+    box.id = v.actor();
+    box.pose = ToPose(v.transform());
+    box.velocity = ToVec(v.velocity());
+    box.angular_velocity = ToVec(v.angular_velocity());
+    box.half_extents = ToVec(v.half_extents());
+    env.vehicles.push_back(box);
+  }
+  return env;
+}
+
+void AirService::Step(const msg::Tick& tick) {
+  pending_events_.clear();
+  air::Commands commands;
+  for (const auto& c : tick.commands()) Apply(c, tick.frame(), &commands);
+  air::Step(model_, &state_, commands, Environment(tick), tick.dt());
+  msg::FrameStamp stamp;
+  stamp.run(tick.run());
+  stamp.frame(tick.frame());
+  stamp.sim_time(tick.sim_time());
+  for (const auto& r : state_.reports) {
+    last_command_[r.drone] = {r.id, ToWire(r.status)};
+    if (r.status == air::CommandStatus::kRejected) Fail(stamp, r.drone, "command " + std::to_string(r.id) + " rejected: " + r.message);
+  }
+  for (const auto& e : state_.events) {
+    if (e.kind != air::EventKind::kReset && e.kind != air::EventKind::kCollision) continue;
+    msg::SimEvent m;
+    m.stamp(stamp);
+    m.service(name_);
+    m.kind(e.kind == air::EventKind::kReset ? msg::EventKind::EVENT_ACTOR_RESET : msg::EventKind::EVENT_COLLISION);
+    m.actor(e.drone);
+    m.other_actor(e.object_kind == air::ObjectKind::kVehicle || e.object_kind == air::ObjectKind::kDrone ? e.object_id : 0);
+    m.message(e.kind == air::EventKind::kReset ? e.message.substr(0, 511) : std::string("collision with ") + air::ToString(e.object_kind));
+    pending_events_.push_back(m);
+  }
+  for (auto& e : pending_events_) {
+    e.stamp(stamp);
+    event_writer_.Write(e);
+  }
+  state_writer_.Write(Publish(stamp));
+}
+
+msg::AirState AirService::Publish(const msg::FrameStamp& stamp) const {
+  msg::AirState out;
+  out.stamp(stamp);
+  out.state_hash(air::StateHash(state_));
+  std::vector<msg::DroneState> drones;
+  drones.reserve(state_.drones.size());
+  for (size_t i = 0; i < state_.drones.size(); ++i) {
+    const auto& s = state_.drones[i];
+    const auto& m = model_.drones[i];
+    msg::DroneState d;
+    d.actor(s.id);
+    if (auto it = blueprints_.find(s.id); it != blueprints_.end()) d.blueprint(it->second);
+    d.transform(FromPose(air::Pose{s.position, s.orientation}));
+    d.linear_velocity(FromVec(s.velocity));
+    d.angular_velocity(FromVec(s.angular_velocity));
+    d.linear_acceleration(FromVec(s.acceleration));
+    d.angular_acceleration(FromVec(s.angular_acceleration));
+    std::vector<msg::RotorState> rotors;
+    for (int r = 0; r < air::RotorCount(m.params.frame); ++r) {
+      msg::RotorState rs;
+      rs.speed(s.rotors[r].speed);
+      rs.thrust(s.rotors[r].thrust);
+      rs.torque(s.rotors[r].torque);
+      rs.control(s.rotors[r].signal);
+      rotors.push_back(rs);
+    }
+    d.rotors(rotors);
+    d.landed(s.landed == air::LandedState::kLanded ? msg::LandedState::LANDED_LANDED : msg::LandedState::LANDED_FLYING);
+    d.armed(s.armed);
+    msg::CollisionInfo c;
+    c.has_collided(s.collision.has_collided);
+    c.other_kind(ToWire(s.collision.kind));
+    c.other_actor(s.collision.kind == air::ObjectKind::kVehicle || s.collision.kind == air::ObjectKind::kDrone ? s.collision.object_id : 0);
+    c.normal(FromVec(s.collision.normal));
+    c.impact_point(FromVec(s.collision.impact_point));
+    c.penetration_depth(s.collision.penetration_depth);
+    c.frame(s.collision.frame);
+    d.collision(c);
+    d.home_pose(FromPose(m.spawn));
+    if (auto it = last_command_.find(s.id); it != last_command_.end()) {
+      d.command_id(it->second.first);
+      d.command_status(it->second.second);
+    }
+    drones.push_back(std::move(d));
+  }
+  out.drones(std::move(drones));
+  return out;
+}
+
+}  // namespace lockstep

@@ -1,0 +1,187 @@
+// The air_sim service behind the real coordinator on the in-process bus: drones are
+// spawned and flown by client commands, AirState comes every frame stamped with it,
+// bad commands are rejected with a reason, and two runs with one seed agree bit for bit.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <thread>
+
+#include "air_service.h"
+#include "lockstep/coordinator/coordinator.h"
+#include "observer.h"
+
+namespace lockstep {
+namespace {
+
+using namespace std::chrono_literals;
+
+class AirServiceTest : public ::testing::Test {
+ protected:
+  void Start(bool sync) {
+    LaunchConfig c;
+    c.world = DefaultWorldSettings();
+    c.world.synchronous_mode(sync);
+    c.world.service_timeout(30);
+    c.services.push_back({"air_sim", "air_sim", "", {}, true, false, "never"});
+    bus_ = CreateInProcessBus();
+    states_ = Reader<msg::AirState>(*bus_, topics::kAirState, [this](const msg::AirState& s, const SampleInfo&) {
+      std::lock_guard<std::mutex> lock(mu_);
+      air_[s.stamp().frame()] = s;
+    });
+    events_ = Reader<msg::SimEvent>(*bus_, topics::kEvent, [this](const msg::SimEvent& e, const SampleInfo&) {
+      std::lock_guard<std::mutex> lock(mu_);
+      event_log_.push_back(e.message().to_string());
+    });
+    observer_ = std::make_unique<testing::Observer>(*bus_);
+    coordinator_ = std::make_unique<Coordinator>(*bus_, c);
+    core_ = std::make_unique<AirService>(*bus_);
+    runner_ = std::make_unique<ServiceRunner>(*bus_, ServiceOptions{"air_sim", "air_sim", false}, *core_);
+    runner_thread_ = std::thread([this] { runner_->Run(stop_); });
+    coordinator_thread_ = std::thread([this] { coordinator_->Run(stop_); });
+  }
+  void TearDown() override {
+    stop_ = true;
+    if (coordinator_thread_.joinable()) coordinator_thread_.join();
+    if (runner_thread_.joinable()) runner_thread_.join();
+  }
+  msg::CommandReply Send(msg::CommandBody b) {
+    auto r = observer_->WaitReply(observer_->Send(std::move(b)), 10s);
+    EXPECT_TRUE(r.has_value());
+    return r.value_or(msg::CommandReply{});
+  }
+  uint32_t SpawnDrone(double x, double y, std::vector<std::pair<std::string, std::string>> attrs = {}) {
+    msg::SpawnActor s;
+    s.blueprint("drone.generic_quad");
+    s.transform().position().x(x);
+    s.transform().position().y(y);
+    s.transform().orientation().w(1);
+    std::vector<msg::BlueprintAttribute> list;
+    for (auto& [k, v] : attrs) {
+      msg::BlueprintAttribute a;
+      a.key(k);
+      a.value(v);
+      list.push_back(a);
+    }
+    s.attributes(list);
+    msg::CommandBody b;
+    b.spawn_actor(s);
+    auto r = Send(b);
+    EXPECT_TRUE(r.accepted()) << r.reason();
+    return r.actor();
+  }
+  msg::CommandReply Drone(uint32_t actor, msg::DroneCommandKind kind, uint64_t id, std::function<void(msg::DroneCommand&)> fill = {}) {
+    msg::DroneCommand d;
+    d.actor(actor);
+    d.kind(kind);
+    d.command_id(id);
+    d.velocity(3);
+    if (fill) fill(d);
+    msg::CommandBody b;
+    b.drone(d);
+    return Send(b);
+  }
+  void Tick(uint32_t n) {
+    msg::TickRequest t;
+    t.count(n);
+    msg::CommandBody b;
+    b.tick_request(t);
+    auto r = Send(b);
+    ASSERT_TRUE(r.accepted()) << r.reason();
+    ASSERT_TRUE(observer_->WaitUntil([&] { return observer_->last_frame() >= r.frame(); }, 60s));
+  }
+  std::optional<msg::AirState> State(uint64_t frame) {
+    std::lock_guard<std::mutex> lock(mu_);
+    auto it = air_.find(frame);
+    if (it == air_.end()) return std::nullopt;
+    return it->second;
+  }
+  std::optional<msg::AirState> WaitState(uint64_t frame) {
+    std::optional<msg::AirState> s;
+    observer_->WaitUntil([&] { return (s = State(frame)).has_value(); }, 10s);
+    return s;
+  }
+
+  std::unique_ptr<Bus> bus_;
+  std::mutex mu_;
+  std::map<uint64_t, msg::AirState> air_;
+  std::vector<std::string> event_log_;
+  Reader<msg::AirState> states_;
+  Reader<msg::SimEvent> events_;
+  std::unique_ptr<testing::Observer> observer_;
+  std::unique_ptr<Coordinator> coordinator_;
+  std::unique_ptr<AirService> core_;
+  std::unique_ptr<ServiceRunner> runner_;
+  std::thread runner_thread_, coordinator_thread_;
+  std::atomic<bool> stop_{false};
+};
+
+TEST_F(AirServiceTest, TakesOffThroughTheWireAndReportsEveryFrame) {
+  Start(true);
+  ASSERT_TRUE(observer_->WaitUntil([&] { return observer_->status() && observer_->status()->state() == msg::RunState::RUN_READY; }, 10s));
+  const uint32_t drone = SpawnDrone(10, -5);
+  EXPECT_TRUE(Drone(drone, msg::DroneCommandKind::DRONE_ARM, 1).accepted());
+  EXPECT_TRUE(Drone(drone, msg::DroneCommandKind::DRONE_TAKEOFF, 2).accepted());
+  Tick(120);  // 6 s
+  for (uint64_t f = 1; f <= 120; ++f) ASSERT_TRUE(WaitState(f)) << "no AirState for frame " << f;
+  auto s = *State(120);
+  ASSERT_EQ(s.drones().size(), 1u);
+  const auto& d = s.drones()[0];
+  EXPECT_EQ(d.actor(), drone);
+  EXPECT_EQ(s.stamp().frame(), 120u);
+  EXPECT_NEAR(s.stamp().sim_time(), 6.0, 1e-9);
+  EXPECT_NEAR(d.transform().position().x(), 10, 0.2);
+  EXPECT_NEAR(d.transform().position().z(), 2.0 + d.home_pose().position().z(), 0.15) << "take-off height 2 m";
+  EXPECT_EQ(d.landed(), msg::LandedState::LANDED_FLYING);
+  EXPECT_TRUE(d.armed());
+  EXPECT_EQ(d.command_id(), 2u);
+  EXPECT_EQ(d.command_status(), msg::DroneCommandStatus::DRONE_CMD_COMPLETED);
+  EXPECT_EQ(d.rotors().size(), 4u);
+}
+
+TEST_F(AirServiceTest, BadDroneCommandsAreRejectedAndTheServiceKeepsTicking) {
+  Start(true);
+  ASSERT_TRUE(observer_->WaitUntil([&] { return observer_->status() && observer_->status()->state() == msg::RunState::RUN_READY; }, 10s));
+  const uint32_t drone = SpawnDrone(0, 0);
+  auto nan = Drone(drone, msg::DroneCommandKind::DRONE_MOVE_TO_POSITION, 3, [](msg::DroneCommand& d) {
+    d.target().x(std::numeric_limits<double>::quiet_NaN());
+  });
+  EXPECT_FALSE(nan.accepted());
+  EXPECT_NE(nan.reason().to_string().find("NaN"), std::string::npos) << nan.reason();
+  auto unknown = Drone(4242, msg::DroneCommandKind::DRONE_ARM, 4);
+  EXPECT_FALSE(unknown.accepted());
+  EXPECT_EQ(unknown.reason().to_string(), "unknown actor 4242");
+  auto range = Drone(drone, msg::DroneCommandKind::DRONE_MOVE_BY_ROLL_PITCH_YAW_THROTTLE, 5,
+                     [](msg::DroneCommand& d) { d.values({0, 0, 0, 3.0}); });
+  EXPECT_FALSE(range.accepted());
+  EXPECT_NE(range.reason().to_string().find("throttle"), std::string::npos);
+  msg::SpawnActor bad;
+  bad.blueprint("drone.generic_quad");
+  bad.transform().orientation().w(1);
+  msg::BlueprintAttribute mass;
+  mass.key("mass");
+  mass.value("0");
+  bad.attributes({mass});
+  msg::CommandBody b;
+  b.spawn_actor(bad);
+  auto spawn = Send(b);
+  EXPECT_FALSE(spawn.accepted());
+  EXPECT_NE(spawn.reason().to_string().find("mass"), std::string::npos) << spawn.reason();
+  // A disarmed drone asked to move: accepted on the wire, rejected by the controller.
+  EXPECT_TRUE(Drone(drone, msg::DroneCommandKind::DRONE_MOVE_TO_POSITION, 6, [](msg::DroneCommand& d) { d.target().x(5); }).accepted());
+  Tick(10);
+  auto s = WaitState(10);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->drones()[0].command_id(), 6u);
+  EXPECT_EQ(s->drones()[0].command_status(), msg::DroneCommandStatus::DRONE_CMD_REJECTED);
+  std::lock_guard<std::mutex> lock(mu_);
+  ASSERT_FALSE(event_log_.empty());
+  bool found = false;
+  for (const auto& e : event_log_) found = found || e.find("command 6 rejected") != std::string::npos;
+  EXPECT_TRUE(found) << event_log_.back();
+}
+
+}  // namespace
+}  // namespace lockstep

@@ -1,6 +1,7 @@
 // Whole-map enumerations: waypoints, topology, junction pairs, spawn points.
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "lockstep/map/map.h"
 
@@ -46,6 +47,95 @@ std::vector<std::pair<Waypoint, Waypoint>> Map::JunctionWaypoints(int junction, 
       if (NodeOf(static_cast<int>(r), out_sec, lane.id) < 0) continue;
       out.emplace_back(MakeWaypoint(static_cast<int>(r), in_sec, lane.id, fwd ? 0.0 : road.length),
                        MakeWaypoint(static_cast<int>(r), out_sec, lane.id, fwd ? road.length : 0.0));
+    }
+  }
+  return out;
+}
+
+namespace {
+// Lane ids of a road a signal (reference) applies to: its <validity> ranges, else every
+// lane of the direction given by `orientation` ("+": with s, "-": against, else both).
+// RoadRunner writes <validity fromLane="0" toLane="0"/>, which names no lane: ignored.
+std::vector<int> LanesFor(const Road& road, const std::string& orientation,
+                          const std::vector<std::pair<int, int>>& validity) {
+  std::vector<int> out;
+  for (const auto& [from, to] : validity) {
+    if (from == 0 && to == 0) continue;
+    for (int id = std::min(from, to); id <= std::max(from, to) && id - std::min(from, to) < 128; ++id)
+      if (id != 0) out.push_back(id);
+  }
+  if (!out.empty()) return out;
+  int max_left = 0, max_right = 0;
+  for (const LaneSection& sec : road.sections) {
+    max_left = std::max(max_left, sec.left_count);
+    max_right = std::max(max_right, static_cast<int>(sec.lanes.size()) - sec.left_count - 1);
+  }
+  if (orientation != "-")
+    for (int id = -1; id >= -max_right; --id) out.push_back(id);
+  if (orientation != "+")
+    for (int id = 1; id <= max_left; ++id) out.push_back(id);
+  return out;
+}
+}  // namespace
+
+std::vector<TrafficLightInfo> Map::TrafficLights() const {
+  std::vector<TrafficLightInfo> out;
+  for (std::size_t r = 0; r < data_.roads.size(); ++r) {
+    const Road& road = data_.roads[r];
+    if (road.sections.empty()) continue;
+    for (const Signal& sig : road.signals) {
+      if (!sig.dynamic && sig.type != "1000001") continue;
+      TrafficLightInfo tl;
+      tl.signal_id = sig.id;
+      tl.road = static_cast<int>(r);
+      tl.s = sig.s;
+      tl.t = sig.t;
+      const bool forward = sig.t < 0 || (sig.t == 0 && sig.orientation != "-");
+      tl.pose.location = Eigen::Vector3d(sig.x, sig.y, sig.z - sig.z_offset);
+      const double hdg = EvaluateReferenceLine(road.plan_view, std::clamp(sig.s, 0.0, road.length)).hdg;
+      tl.pose.yaw = std::remainder(forward ? hdg + std::numbers::pi : hdg, 2 * std::numbers::pi);
+      for (const Controller& c : data_.controllers)
+        if (std::find(c.signal_ids.begin(), c.signal_ids.end(), sig.id) != c.signal_ids.end()) tl.controller_id = c.id;
+      // Preferred: <signalReference>s on junction roads name the controlled connecting
+      // lanes (RoadRunner/CARLA towns); the stop point is where they begin.
+      for (std::size_t rr = 0; rr < data_.roads.size(); ++rr) {
+        const Road& jr = data_.roads[rr];
+        if (jr.junction_index < 0 || jr.sections.empty()) continue;
+        for (const SignalReference& ref : jr.signal_refs) {
+          if (ref.id != sig.id) continue;
+          for (int lane_id : LanesFor(jr, ref.orientation, ref.validity)) {
+            const bool fwd = lane_id < 0;
+            const int sec = fwd ? 0 : static_cast<int>(jr.sections.size()) - 1;
+            const int node = NodeOf(static_cast<int>(rr), sec, lane_id);
+            if (node < 0 || nodes_[static_cast<std::size_t>(node)].type != LaneType::Driving) continue;
+            tl.junction = jr.junction_index;
+            // Stop on the incoming lane's end when there is one (same place, CARLA's choice).
+            const auto& preds = nodes_[static_cast<std::size_t>(node)].predecessors;
+            const LaneNode& stop = nodes_[static_cast<std::size_t>(preds.empty() ? node : preds.front())];
+            const Waypoint w = MakeWaypoint(stop.road, stop.section, stop.lane, preds.empty() ? stop.EntryS() : stop.ExitS());
+            const bool dup = std::any_of(tl.stop_waypoints.begin(), tl.stop_waypoints.end(), [&](const Waypoint& o) {
+              return o.road == w.road && o.section == w.section && o.lane == w.lane;
+            });
+            if (!dup) tl.stop_waypoints.push_back(w);
+          }
+        }
+      }
+      if (tl.stop_waypoints.empty()) {
+        // Otherwise: the lanes on the signal's side of its own road, stopping where they
+        // leave the road (its end for lanes driving with s).
+        const RoadLink& link = forward ? road.successor : road.predecessor;
+        if (link.kind == RoadLink::Kind::Junction) {
+          auto it = data_.junction_index.find(link.element_id);
+          if (it != data_.junction_index.end()) tl.junction = it->second;
+        }
+        const int section = forward ? static_cast<int>(road.sections.size()) - 1 : 0;
+        for (int lane_id : LanesFor(road, forward ? "+" : "-", sig.validity)) {
+          const Lane* lane = road.sections[static_cast<std::size_t>(section)].Find(lane_id);
+          if (!lane || lane->type != LaneType::Driving) continue;
+          tl.stop_waypoints.push_back(MakeWaypoint(static_cast<int>(r), section, lane_id, forward ? road.length : 0.0));
+        }
+      }
+      out.push_back(std::move(tl));
     }
   }
   return out;

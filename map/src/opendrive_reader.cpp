@@ -390,6 +390,8 @@ class Reader {
         ref.s = Num(s, "s");
         ref.t = Num(s, "t");
         ref.orientation = s.attribute("orientation").value();
+        for (pugi::xml_node v = s.child("validity"); v; v = v.next_sibling("validity"))
+          ref.validity.emplace_back(Int(v, "fromLane"), Int(v, "toLane"));
         r.signal_refs.push_back(ref);
       }
     }

@@ -6,6 +6,7 @@
 
 #include "lockstep/map/error.h"
 #include "lockstep/map/lane_invasion.h"
+#include "lockstep/map/map.h"
 #include "lockstep/map/map_info.h"
 #include "lockstep/map/route_planner.h"
 #include "lockstep/map/scene.h"
@@ -147,6 +148,23 @@ TEST_P(map_generated, SceneIsPlausible) {
   int lights = 0;
   for (const PropInstance& p : scene.props) lights += p.kind == "traffic_light";
   EXPECT_EQ(lights, g.town.traffic_lights);
+}
+
+TEST_P(map_generated, TrafficLightsGuardSignalisedJunctions) {
+  const Generated& g = Get(GetParam());
+  const auto lights = g.map.TrafficLights();
+  ASSERT_EQ(static_cast<int>(lights.size()), g.town.traffic_lights);
+  std::map<int, int> per_junction;
+  for (const TrafficLightInfo& tl : lights) {
+    ASSERT_EQ(tl.stop_waypoints.size(), 1u) << tl.signal_id;
+    ASSERT_GE(tl.junction, 0);
+    EXPECT_FALSE(tl.controller_id.empty());
+    ++per_junction[tl.junction];
+    const Waypoint& w = tl.stop_waypoints.front();
+    EXPECT_LT((tl.pose.location - w.transform.location).head<2>().norm(), 10.0);
+    for (const Waypoint& n : g.map.Next(w, 1.0)) EXPECT_EQ(n.junction, tl.junction);
+  }
+  for (const auto& [junction, count] : per_junction) EXPECT_GE(count, 3) << junction;  // one per approach
 }
 
 INSTANTIATE_TEST_SUITE_P(Towns, map_generated, ::testing::Values(TownKind::Town1, TownKind::Town2));

@@ -229,3 +229,32 @@ INSTANTIATE_TEST_SUITE_P(Carla, map_carla, ::testing::Values("Town01", "Town02")
 
 }  // namespace
 }  // namespace lockstep::map
+
+namespace lockstep::map {
+namespace {
+
+// Each traffic light controls driving lanes whose stop point is the mouth of the
+// junction it guards, and it stands on the right of the traffic it controls.
+TEST_P(map_carla, TrafficLightsControlJunctionApproaches) {
+  const Map& m = Town(GetParam());
+  const auto lights = m.TrafficLights();
+  EXPECT_EQ(lights.size(), GetParam() == "Town01" ? 36u : 24u);
+  for (const TrafficLightInfo& tl : lights) {
+    ASSERT_FALSE(tl.stop_waypoints.empty()) << tl.signal_id;
+    EXPECT_GE(tl.junction, 0) << tl.signal_id;
+    for (const Waypoint& w : tl.stop_waypoints) {
+      EXPECT_EQ(w.lane_type, LaneType::Driving);
+      // The light is within 15 m of the stop point, to its right.
+      const Eigen::Vector3d d = tl.pose.location - w.transform.location;
+      EXPECT_LT(d.head<2>().norm(), 15.0) << tl.signal_id;
+      EXPECT_LT(-std::sin(w.transform.yaw) * d.x() + std::cos(w.transform.yaw) * d.y(), 0.0) << tl.signal_id;
+      // Driving on from the stop point enters the light's junction.
+      bool enters = false;
+      for (const Waypoint& n : m.Next(w, 2.0)) enters |= n.junction == tl.junction;
+      EXPECT_TRUE(enters) << tl.signal_id;
+    }
+  }
+}
+
+}  // namespace
+}  // namespace lockstep::map

@@ -32,6 +32,18 @@ struct LanePoint {
   double s = 0, t = 0;
 };
 
+// A traffic light (dynamic signal) with the lanes it controls, like CARLA's
+// carla.TrafficLight get_stop_waypoints() / get_affected_lane_waypoints().
+struct TrafficLightInfo {
+  std::string signal_id;
+  int road = -1;                 // road index the signal is placed on
+  double s = 0, t = 0;           // its road coordinates (m)
+  Transform pose;                // pole foot, yaw facing the traffic it controls
+  int junction = -1;             // junction the controlled lanes drive into (-1: none)
+  std::string controller_id;     // <controller> that groups it with others ("" if none)
+  std::vector<Waypoint> stop_waypoints;  // one per controlled lane, at the lane's end (stop line)
+};
+
 class SegmentIndex;  // spatial index over lane-centre segments (map_queries.cpp)
 
 // An OpenDRIVE road network with CARLA-style queries. Immutable after construction.
@@ -94,6 +106,12 @@ class Map {
   double SpeedLimit(const Waypoint& wp, double fallback = 30.0 / 3.6) const;
   // Speed limit (m/s) at a location: that of the nearest driving lane, heading-blind.
   double SpeedLimitAt(const Eigen::Vector3d& p, double fallback = 30.0 / 3.6) const;
+
+  // Every dynamic signal with the driving lanes it controls. The controlled direction
+  // comes from the side of the road the signal stands on (t < 0: lanes driving with s),
+  // which also holds for RoadRunner exports whose `orientation` is inverted; `orientation`
+  // decides only for t = 0. <validity> narrows the lanes.
+  std::vector<TrafficLightInfo> TrafficLights() const;
 
   // Axis-aligned bounds of all roads (m).
   Eigen::Vector2d BoundsMin() const { return bounds_min_; }

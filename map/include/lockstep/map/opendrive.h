@@ -108,6 +108,7 @@ struct SignalReference {
   std::string id;
   double s = 0, t = 0;
   std::string orientation;
+  std::vector<std::pair<int, int>> validity;  // lane id ranges it applies to
 };
 
 struct RoadObject {

@@ -109,6 +109,9 @@ Edge EdgeAt(const Road& road, double s, int side, std::vector<LaneSpan>* spans) 
 }
 
 void AddSignalProps(const Map& map, Scene* scene) {
+  // Traffic light heads face the traffic they control (robust to inverted orientation).
+  std::unordered_map<std::string, double> light_yaw;
+  for (const TrafficLightInfo& tl : map.TrafficLights()) light_yaw[tl.signal_id] = tl.pose.yaw;
   for (const Road& road : map.Data().roads) {
     for (const Signal& sig : road.signals) {
       PropInstance p;
@@ -119,6 +122,7 @@ void AddSignalProps(const Map& map, Scene* scene) {
       p.ref = sig.id;
       if (sig.dynamic || sig.type == "1000001") {
         p.kind = "traffic_light";
+        if (auto it = light_yaw.find(sig.id); it != light_yaw.end()) p.yaw = it->second;
         p.height = 4.2;
       } else if (sig.type == "206") {
         p.kind = "stop_sign";

@@ -33,6 +33,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     }
     if (wps.size() >= 2) lm::PlanRoute(map, wps.front(), wps.back());
     map.Topology();
+    map.TrafficLights();
     lm::ComputeStats(map);
     lm::BuildRoadMeshes(map);
   } catch (const lockstep::map::MapError&) {

@@ -112,6 +112,8 @@ struct Coordinator::Impl {
   std::string map_scene;
   std::string failed_service;
   std::string failure_reason;
+  size_t next_scheduled = 0;                  // index into config.scenario
+  std::map<std::string, uint32_t> aliases;    // scenario actor names -> actor ids
 
   // Statistics.
   std::deque<Clock::time_point> recent_done;
@@ -306,6 +308,8 @@ struct Coordinator::Impl {
     barrier.Close();
     commands.ResetActors();
     ticks_requested = 0;
+    next_scheduled = 0;
+    aliases.clear();
     PublishWorld();
     PublishMap();
     status_dirty = true;
@@ -409,12 +413,40 @@ struct Coordinator::Impl {
     t.dt(settings.fixed_delta_seconds());
     t.sim_time(sim_time + settings.fixed_delta_seconds());
     t.seed(seed);
-    t.commands(commands.TakePending());
+    std::vector<msg::Command> client = commands.TakePending();
+    std::vector<msg::Command> batch = Scheduled(t.frame());
+    batch.insert(batch.end(), client.begin(), client.end());
+    t.commands(std::move(batch));
     open_tick = t;
     barrier.Open(run, t.frame(), config.RequiredServices());
     tick_sent = now;
     tick_deadline = now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(settings.service_timeout()));
     Post(tick_writer, open_tick);
+  }
+
+  // The scenario's commands for `frame`, validated like a client's, with aliases resolved.
+  std::vector<msg::Command> Scheduled(uint64_t for_frame) {
+    const auto& steps = config.scenario;
+    while (next_scheduled < steps.size() && steps[next_scheduled].frame < for_frame) ++next_scheduled;  // after a reset
+    while (next_scheduled < steps.size() && steps[next_scheduled].frame == for_frame) {
+      const ScheduledCommand& step = steps[next_scheduled++];
+      msg::Command c = step.command;
+      if (!step.actor_alias.empty()) {
+        auto it = aliases.find(step.actor_alias);
+        if (it == aliases.end()) {
+          spdlog::error("scenario step {} at frame {}: no actor named '{}'", c.sequence_number(), for_frame, step.actor_alias);
+          continue;
+        }
+        if (c.body()._d() == msg::CommandKind::CMD_DRONE) c.body().drone().actor(it->second);
+      }
+      msg::CommandReply r = commands.Submit(c, run, for_frame, settings.synchronous_mode());
+      if (!r.accepted()) {
+        spdlog::error("scenario step {} at frame {} rejected: {}", c.sequence_number(), for_frame, r.reason().to_string());
+        continue;
+      }
+      if (!step.alias.empty()) aliases[step.alias] = r.actor();
+    }
+    return commands.TakePending();
   }
 
   void ResendTick(Clock::time_point now) {

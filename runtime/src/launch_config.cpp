@@ -1,6 +1,9 @@
 #include "lockstep/runtime/launch_config.h"
 
+#include <algorithm>
+#include <filesystem>
 #include <cmath>
+#include <map>
 #include <set>
 
 #include "lockstep/runtime/yaml_config.h"
@@ -86,6 +89,99 @@ ServiceLaunch LoadService(YamlMap m) {
   return s;
 }
 
+msg::Vector3 Vec(YamlMap& m, const std::string& key, const YAML::Node& n) {
+  if (!n.IsSequence() || n.size() != 3) m.Fail(n, key, "must be [x, y, z]");
+  msg::Vector3 v;
+  try {
+    v.x(n[0].as<double>());
+    v.y(n[1].as<double>());
+    v.z(n[2].as<double>());
+  } catch (const YAML::Exception&) {
+    m.Fail(n, key, "must be three numbers");
+  }
+  return v;
+}
+
+msg::DroneCommandKind DroneKind(YamlMap& m, const std::string& name) {
+  using K = msg::DroneCommandKind;
+  static const std::map<std::string, K> kinds{
+      {"arm", K::DRONE_ARM}, {"disarm", K::DRONE_DISARM}, {"takeoff", K::DRONE_TAKEOFF}, {"land", K::DRONE_LAND},
+      {"hover", K::DRONE_HOVER}, {"go_home", K::DRONE_GO_HOME}, {"move_to_position", K::DRONE_MOVE_TO_POSITION},
+      {"move_on_path", K::DRONE_MOVE_ON_PATH}, {"move_by_velocity", K::DRONE_MOVE_BY_VELOCITY},
+      {"move_by_velocity_z", K::DRONE_MOVE_BY_VELOCITY_Z}, {"rotate_to_yaw", K::DRONE_ROTATE_TO_YAW},
+      {"rotate_by_yaw_rate", K::DRONE_ROTATE_BY_YAW_RATE}};
+  auto it = kinds.find(name);
+  if (it == kinds.end()) {
+    std::string known;
+    for (const auto& [k, v] : kinds) known += " " + k;
+    m.Fail(m.Child("drone"), "drone", "unknown drone command '" + name + "' (known:" + known + ")");
+  }
+  return it->second;
+}
+
+// One scenario step: {frame, spawn, as, at, yaw, attributes} or {frame, actor, drone, ...}.
+ScheduledCommand LoadStep(YamlMap m, uint64_t index) {
+  ScheduledCommand s;
+  s.command.client("scenario");
+  s.command.sequence_number(index + 1);
+  m.Require("frame", &s.frame);
+  if (s.frame < 1) m.Fail(m.Child("frame"), "frame", "must be >= 1");
+  std::string spawn, drone;
+  msg::CommandBody body;
+  if (m.Get("spawn", &spawn)) {
+    msg::SpawnActor a;
+    a.blueprint(spawn);
+    m.Require("as", &s.alias);
+    msg::Pose pose;
+    if (YAML::Node at = m.Child("at")) pose.position(Vec(m, "at", at));
+    double yaw = 0;
+    m.Get("yaw", &yaw);
+    pose.orientation().w(std::cos(yaw / 2));
+    pose.orientation().z(std::sin(yaw / 2));
+    a.transform(pose);
+    std::map<std::string, std::string> attrs;
+    m.Get("attributes", &attrs);
+    std::vector<msg::BlueprintAttribute> list;
+    for (const auto& [k, v] : attrs) {
+      msg::BlueprintAttribute b;
+      b.key(k);
+      b.value(v);
+      list.push_back(b);
+    }
+    a.attributes(list);
+    body.spawn_actor(a);
+  } else if (m.Get("drone", &drone)) {
+    msg::DroneCommand d;
+    m.Require("actor", &s.actor_alias);
+    d.kind(DroneKind(m, drone));
+    d.command_id(index + 1);
+    double x = 0;
+    if (YAML::Node t = m.Child("target")) d.target(Vec(m, "target", t));
+    if (YAML::Node p = m.Child("path")) {
+      if (!p.IsSequence()) m.Fail(p, "path", "must be a list of [x, y, z]");
+      std::vector<msg::Vector3> path;
+      for (const auto& pt : p) path.push_back(Vec(m, "path", pt));
+      d.path(path);
+    }
+    d.velocity(5);
+    if (m.Get("velocity", &x)) d.velocity(x);
+    if (m.Get("duration", &x)) d.duration(x);
+    if (m.Get("timeout", &x)) d.timeout(x);
+    if (m.Get("yaw", &x)) {
+      msg::YawMode y;
+      y.is_rate(drone == "rotate_by_yaw_rate");
+      y.value(x);
+      d.yaw(y);
+    }
+    body.drone(d);
+  } else {
+    m.Fail(m.Child("frame"), "spawn", "or 'drone' is required in a scenario step");
+  }
+  s.command.body(body);
+  m.Finish();
+  return s;
+}
+
 LaunchConfig Load(const YAML::Node& root, const std::string& where) {
   LaunchConfig c;
   c.source = where;
@@ -109,6 +205,12 @@ LaunchConfig Load(const YAML::Node& root, const std::string& where) {
     }
     c.services.push_back(std::move(s));
   }
+  YAML::Node scenario = m.Child("scenario");
+  if (scenario && !scenario.IsSequence()) m.Fail(scenario, "scenario", "must be a list of steps");
+  for (size_t i = 0; scenario && i < scenario.size(); ++i) {
+    c.scenario.push_back(LoadStep(YamlMap(scenario[i], where, "scenario[" + std::to_string(i) + "]"), i));
+  }
+  std::stable_sort(c.scenario.begin(), c.scenario.end(), [](const auto& a, const auto& b) { return a.frame < b.frame; });
   m.Finish();
   if (c.domain_id < 0 || c.domain_id > 232) {
     throw InputError(where + ": domain_id must be in 0..232, got " + std::to_string(c.domain_id));
@@ -122,6 +224,15 @@ LaunchConfig ParseLaunchConfig(const std::string& yaml_text, const std::string& 
   return Load(LoadYamlString(yaml_text, source_name), source_name);
 }
 
-LaunchConfig LoadLaunchConfig(const std::string& file) { return Load(LoadYamlFile(file), file); }
+LaunchConfig LoadLaunchConfig(const std::string& file) {
+  LaunchConfig c = Load(LoadYamlFile(file), file);
+  // Paths in a config are relative to the config file.
+  const std::filesystem::path dir = std::filesystem::path(file).parent_path();
+  if (!c.map.empty() && std::filesystem::path(c.map).is_relative()) c.map = (dir / c.map).lexically_normal().string();
+  if (!c.output_dir.empty() && std::filesystem::path(c.output_dir).is_relative()) {
+    c.output_dir = (dir / c.output_dir).lexically_normal().string();
+  }
+  return c;
+}
 
 }  // namespace lockstep

@@ -19,6 +19,15 @@ struct ServiceLaunch {
   std::string restart = "never";    // never | on-failure (the launcher starts a replacement)
 };
 
+// A command the coordinator itself issues at a given frame, so a scripted scenario is as
+// deterministic as the run (it is sequenced before any client command of that frame).
+struct ScheduledCommand {
+  uint64_t frame = 1;          // applied in the tick that produces this frame
+  std::string alias;           // spawn: a name later steps use in `actor`
+  std::string actor_alias;     // the actor this command addresses, by alias (filled in at run time)
+  msg::Command command;        // client "scenario"
+};
+
 struct LaunchConfig {
   std::string source = "(built-in)";  // file it came from, for messages
   std::string name = "lockstep";
@@ -31,6 +40,7 @@ struct LaunchConfig {
   std::string output_dir;             // where services write outputs; empty = none
   msg::WorldSettings world;           // see DefaultWorldSettings()
   std::vector<ServiceLaunch> services;
+  std::vector<ScheduledCommand> scenario;  // sorted by frame, stable
 
   std::vector<std::string> RequiredServices() const;
 };

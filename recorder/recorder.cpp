@@ -1,0 +1,62 @@
+#include "recorder.h"
+
+#include <cstdio>
+#include <filesystem>
+
+#include "lockstep/runtime/error.h"
+#include "lockstep/runtime/hash.h"
+#include "lockstep/runtime/log.h"
+
+namespace lockstep {
+
+Recorder::Recorder(Bus& bus, RecorderOptions options) : options_(std::move(options)), air_(bus, topics::kAirState, 64) {
+  if (options_.output_dir.empty()) throw InputError("recorder: no output_dir in the launch config");
+  std::filesystem::create_directories(options_.output_dir);
+}
+
+void Recorder::BeginRun(const msg::WorldInfo& world) {
+  mode_ = world.settings().perception_mode();
+  const std::string dir = options_.output_dir + "/run" + std::to_string(world.run());
+  std::filesystem::create_directories(dir);
+  air_csv_ = std::ofstream(dir + "/air_state.csv");
+  frames_csv_ = std::ofstream(dir + "/frames.csv");
+  if (!air_csv_ || !frames_csv_) throw InputError("recorder: cannot write into " + dir);
+  hash_ = Fnv1a64().Add(world.run()).Add(world.seed()).value();
+  Line(air_csv_, "frame,sim_time,actor,x,y,z,qw,qx,qy,qz,vx,vy,vz,landed,armed,command_id,command_status");
+  Line(frames_csv_, "frame,sim_time,commands,air_state_hash");
+  spdlog::info("recording run {} into {}", world.run(), dir);
+}
+
+void Recorder::Line(std::ofstream& out, const std::string& line) {
+  out << line << '\n';
+  hash_ = Fnv1a64().Add(hash_).Add(std::string_view(line)).value();
+}
+
+void Recorder::Step(const msg::Tick& tick) {
+  const uint64_t frame = PerceptionFrame(mode_, tick.frame());
+  uint64_t air_hash = 0;
+  if (options_.air_state && frame >= 1) {
+    auto air = air_.WaitFor(tick.run(), frame, std::chrono::milliseconds(static_cast<int>(options_.input_timeout_s * 1000)));
+    if (!air) throw InputError("recorder: no AirState of frame " + std::to_string(frame) + " within the timeout");
+    air_hash = air->state_hash();
+    char buf[512];
+    for (const auto& d : air->drones()) {
+      const auto& p = d.transform().position();
+      const auto& q = d.transform().orientation();
+      const auto& v = d.linear_velocity();
+      std::snprintf(buf, sizeof buf, "%llu,%.3f,%u,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.4f,%.4f,%.4f,%d,%d,%llu,%d",
+                    static_cast<unsigned long long>(frame), air->stamp().sim_time(), d.actor(), p.x(), p.y(), p.z(), q.w(), q.x(),
+                    q.y(), q.z(), v.x(), v.y(), v.z(), d.landed() == msg::LandedState::LANDED_LANDED ? 1 : 0, d.armed() ? 1 : 0,
+                    static_cast<unsigned long long>(d.command_id()), static_cast<int>(d.command_status()));
+      Line(air_csv_, buf);
+    }
+  }
+  char buf[128];
+  std::snprintf(buf, sizeof buf, "%llu,%.3f,%zu,%016llx", static_cast<unsigned long long>(tick.frame()), tick.sim_time(),
+                tick.commands().size(), static_cast<unsigned long long>(air_hash));
+  Line(frames_csv_, buf);
+  air_csv_.flush();
+  frames_csv_.flush();
+}
+
+}  // namespace lockstep

@@ -2,6 +2,11 @@
 
 #include <sstream>
 
+#include "lockstep/map/map.h"
+#include "lockstep/map/scene.h"
+#include "lockstep/map/scene_mesh.h"
+#include "lockstep/runtime/error.h"
+
 #include "lockstep/runtime/log.h"
 
 namespace lockstep {
@@ -146,11 +151,53 @@ AirService::AirService(Bus& bus, std::string name)
     : name_(std::move(name)),
       state_writer_(bus, topics::kAirState),
       event_writer_(bus, topics::kEvent),
-      ground_(bus, topics::kGroundState) {}
+      ground_(bus, topics::kGroundState),
+      map_reader_(bus, topics::kMap, [this](const msg::MapData& m, const SampleInfo&) {
+        {
+          std::lock_guard<std::mutex> lock(map_mu_);
+          map_ = m;
+        }
+        map_cv_.notify_all();
+      }) {}
+
+// The town's static meshes from the map the coordinator publishes (no shared disk needed):
+// roads, sidewalks, buildings, poles and trees become the drones' static collision mesh.
+void AirService::LoadTown(const msg::WorldInfo& world) {
+  if (world.map_name().to_string().empty()) {
+    town_mesh_.reset();
+    town_hash_ = 0;
+    return;
+  }
+  if (world.map_hash() == town_hash_ && town_mesh_) return;  // same map as before: reuse
+  std::optional<msg::MapData> data;
+  {
+    std::unique_lock<std::mutex> lock(map_mu_);
+    map_cv_.wait_for(lock, std::chrono::seconds(30), [&] { return map_ && map_->content_hash() == world.map_hash(); });
+    if (map_ && map_->content_hash() == world.map_hash()) data = map_;
+  }
+  if (!data) throw InputError("air_sim: no map '" + world.map_name().to_string() + "' from the coordinator within 30 s");
+  const map::Map town = map::Map::FromString(data->opendrive(), data->name().to_string());
+  const map::Scene scene = data->scene().empty() ? map::GenerateScene(town, world.seed())
+                                                 : map::SceneFromYaml(data->scene(), data->name().to_string() + ".scene.yaml");
+  std::vector<float> xyz;
+  std::vector<std::uint32_t> indices;
+  for (const auto& m : map::BuildWorldMeshes(town, scene)) {
+    // The ground plane is the model's own (exact, cheaper); the mesh adds what stands on it.
+    if (m.semantic_tag == map::semantic::kGround) continue;
+    const auto base = static_cast<std::uint32_t>(xyz.size() / 3);
+    xyz.insert(xyz.end(), m.vertices.begin(), m.vertices.end());
+    for (auto i : m.indices) indices.push_back(base + i);
+  }
+  town_mesh_ = air::StaticMesh::Build(xyz, indices, 4.0, 1);
+  town_hash_ = world.map_hash();
+  spdlog::info("town '{}': {} triangles for drone contact", data->name().to_string(), town_mesh_->triangle_count());
+}
 
 void AirService::BeginRun(const msg::WorldInfo& world) {
+  LoadTown(world);
   model_ = air::World{};
   model_.seed = world.seed();
+  model_.statics.mesh = town_mesh_;
   state_ = air::MakeState(model_);
   blueprints_.clear();
   last_command_.clear();

@@ -1,7 +1,9 @@
 #pragma once
 // The air_sim service core: turns the tick's commands into air::Commands, steps the
 // multirotor world (air::Step) and publishes AirState and events stamped with the frame.
+#include <condition_variable>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <set>
 #include <string>
@@ -27,11 +29,18 @@ class AirService final : public ServiceCore {
   void Fail(const msg::FrameStamp& stamp, uint32_t actor, const std::string& why);
   air::Environment Environment(const msg::Tick& tick);
   msg::AirState Publish(const msg::FrameStamp& stamp) const;
+  void LoadTown(const msg::WorldInfo& world);
 
   std::string name_;
   Writer<msg::AirState> state_writer_;
   Writer<msg::SimEvent> event_writer_;
   FrameBuffer<msg::GroundState> ground_;
+  Reader<msg::MapData> map_reader_;
+  std::mutex map_mu_;
+  std::condition_variable map_cv_;
+  std::optional<msg::MapData> map_;                       // latest map from the coordinator
+  uint64_t town_hash_ = 0;                                // map whose mesh is in model_.statics
+  std::shared_ptr<const air::StaticMesh> town_mesh_;
   bool wait_for_ground_ = false;  // a ground_sim is in the run: use its vehicles (Jacobi, frame k-1)
   air::World model_;
   air::WorldState state_;

@@ -11,6 +11,7 @@
 
 #include "air_service.h"
 #include "lockstep/coordinator/coordinator.h"
+#include "lockstep/map/scene.h"
 #include "observer.h"
 
 namespace lockstep {
@@ -181,6 +182,105 @@ TEST_F(AirServiceTest, BadDroneCommandsAreRejectedAndTheServiceKeepsTicking) {
   bool found = false;
   for (const auto& e : event_log_) found = found || e.find("command 6 rejected") != std::string::npos;
   EXPECT_TRUE(found) << event_log_.back();
+}
+
+}  // namespace
+}  // namespace lockstep
+
+namespace lockstep {
+namespace {
+
+using namespace std::chrono_literals;
+
+// The map travels over DDS: air_sim builds the town mesh from the coordinator's MapData
+// (never from a file), and a drone flown at a building's wall collides with it.
+TEST(AirServiceTown, DroneHitsABuildingOfTheMapPublishedOverDds) {
+  const std::string xodr = std::string(LOCKSTEP_TEST_TOWN_DIR) + "/LockstepTown1.xodr";
+  const map::Scene scene = map::LoadSceneFile(std::string(LOCKSTEP_TEST_TOWN_DIR) + "/LockstepTown1.scene.yaml");
+  ASSERT_FALSE(scene.buildings.empty());
+  const auto& b = scene.buildings.front();
+  LaunchConfig c;
+  c.world = DefaultWorldSettings();
+  c.world.synchronous_mode(true);
+  c.world.service_timeout(60);
+  c.map = xodr;
+  c.services.push_back({"air_sim", "air_sim", "", {}, true, false, "never"});
+  auto bus = CreateInProcessBus();
+  std::mutex mu;
+  std::optional<msg::AirState> last;
+  Reader<msg::AirState> states(*bus, topics::kAirState, [&](const msg::AirState& s, const SampleInfo&) {
+    std::lock_guard<std::mutex> lock(mu);
+    last = s;
+  });
+  testing::Observer obs(*bus);
+  Coordinator coordinator(*bus, c);
+  AirService core(*bus);
+  ServiceRunner runner(*bus, ServiceOptions{"air_sim", "air_sim", false}, core);
+  std::atomic<bool> stop{false};
+  std::thread rt([&] { runner.Run(stop); });
+  std::thread ct([&] { coordinator.Run(stop); });
+  struct Join {
+    std::atomic<bool>& stop;
+    std::thread& a;
+    std::thread& b;
+    ~Join() {
+      stop = true;
+      a.join();
+      b.join();
+    }
+  } join{stop, rt, ct};
+  ASSERT_TRUE(obs.WaitUntil([&] { return obs.status() && obs.status()->state() == msg::RunState::RUN_READY; }, 60s));
+  ASSERT_TRUE(core.model().statics.mesh) << "no town mesh";
+  EXPECT_GT(core.model().statics.mesh->triangle_count(), 10000u);
+  // Start 8 m from the building's centre along its local -y (the street side), at 3 m.
+  const double ox = b.x + std::sin(b.yaw) * (b.depth / 2 + 6), oy = b.y - std::cos(b.yaw) * (b.depth / 2 + 6);
+  msg::SpawnActor s;
+  s.blueprint("drone.generic_quad");
+  s.transform().position().x(ox);
+  s.transform().position().y(oy);
+  s.transform().position().z(b.z);
+  s.transform().orientation().w(1);
+  msg::CommandBody body;
+  body.spawn_actor(s);
+  auto spawn = obs.WaitReply(obs.Send(body), 10s);
+  ASSERT_TRUE(spawn && spawn->accepted());
+  auto send = [&](msg::DroneCommandKind kind, std::function<void(msg::DroneCommand&)> fill = {}) {
+    msg::DroneCommand d;
+    d.actor(spawn->actor());
+    d.kind(kind);
+    d.velocity(3);
+    if (fill) fill(d);
+    msg::CommandBody cb;
+    cb.drone(d);
+    auto r = obs.WaitReply(obs.Send(cb), 10s);
+    ASSERT_TRUE(r && r->accepted()) << (r ? r->reason().to_string() : "no reply");
+  };
+  send(msg::DroneCommandKind::DRONE_ARM);
+  send(msg::DroneCommandKind::DRONE_TAKEOFF);
+  auto tick = [&](uint32_t n) {
+    msg::TickRequest t;
+    t.count(n);
+    msg::CommandBody tb;
+    tb.tick_request(t);
+    auto r = obs.WaitReply(obs.Send(tb), 10s);
+    ASSERT_TRUE(r && r->accepted());
+    ASSERT_TRUE(obs.WaitUntil([&] { return obs.last_frame() >= r->frame(); }, 60s));
+  };
+  tick(100);
+  // Fly through the building's centre at 3 m above its ground.
+  send(msg::DroneCommandKind::DRONE_MOVE_TO_POSITION, [&](msg::DroneCommand& d) {
+    d.target().x(b.x);
+    d.target().y(b.y);
+    d.target().z(b.z + 3);
+  });
+  tick(200);
+  ASSERT_TRUE(obs.WaitUntil([&] { std::lock_guard<std::mutex> lock(mu); return last && last->stamp().frame() == 300; }, 10s));
+  std::lock_guard<std::mutex> lock(mu);
+  const auto& d = last->drones().at(0);
+  EXPECT_TRUE(d.collision().has_collided());
+  EXPECT_EQ(d.collision().other_kind(), msg::ObjectKind::OBJECT_STATIC);
+  const double left = std::hypot(d.transform().position().x() - b.x, d.transform().position().y() - b.y);
+  EXPECT_GT(left, std::min(b.width, b.depth) / 2 - 0.5) << "the drone must stay outside the walls";
 }
 
 }  // namespace

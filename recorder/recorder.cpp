@@ -18,12 +18,16 @@ void Recorder::BeginRun(const msg::WorldInfo& world) {
   mode_ = world.settings().perception_mode();
   const std::string dir = options_.output_dir + "/run" + std::to_string(world.run());
   std::filesystem::create_directories(dir);
-  air_csv_ = std::ofstream(dir + "/air_state.csv");
-  frames_csv_ = std::ofstream(dir + "/frames.csv");
+  // Append when the files exist: a replacement recorder continues the record.
+  const bool resume = std::filesystem::exists(dir + "/frames.csv");
+  air_csv_ = std::ofstream(dir + "/air_state.csv", std::ios::app);
+  frames_csv_ = std::ofstream(dir + "/frames.csv", std::ios::app);
   if (!air_csv_ || !frames_csv_) throw InputError("recorder: cannot write into " + dir);
   hash_ = Fnv1a64().Add(world.run()).Add(world.seed()).value();
-  Line(air_csv_, "frame,sim_time,actor,x,y,z,qw,qx,qy,qz,vx,vy,vz,landed,armed,command_id,command_status");
-  Line(frames_csv_, "frame,sim_time,commands,air_state_hash");
+  if (!resume) {
+    Line(air_csv_, "frame,sim_time,actor,x,y,z,qw,qx,qy,qz,vx,vy,vz,landed,armed,command_id,command_status");
+    Line(frames_csv_, "tick,sim_time,commands,shown_frame,air_state_hash");
+  }
   spdlog::info("recording run {} into {}", world.run(), dir);
 }
 
@@ -33,6 +37,9 @@ void Recorder::Line(std::ofstream& out, const std::string& line) {
 }
 
 void Recorder::Step(const msg::Tick& tick) {
+  // A replacement recorder cannot rebuild past rows (their inputs are gone): it appends
+  // from the frame it takes over, and its state hash starts over from there.
+  if (replaying()) return;
   const uint64_t frame = PerceptionFrame(mode_, tick.frame());
   uint64_t air_hash = 0;
   if (options_.air_state && frame >= 1) {
@@ -52,8 +59,8 @@ void Recorder::Step(const msg::Tick& tick) {
     }
   }
   char buf[128];
-  std::snprintf(buf, sizeof buf, "%llu,%.3f,%zu,%016llx", static_cast<unsigned long long>(tick.frame()), tick.sim_time(),
-                tick.commands().size(), static_cast<unsigned long long>(air_hash));
+  std::snprintf(buf, sizeof buf, "%llu,%.3f,%zu,%llu,%016llx", static_cast<unsigned long long>(tick.frame()), tick.sim_time(),
+                tick.commands().size(), static_cast<unsigned long long>(frame), static_cast<unsigned long long>(air_hash));
   Line(frames_csv_, buf);
   air_csv_.flush();
   frames_csv_.flush();

@@ -324,6 +324,7 @@ void AirService::Step(const msg::Tick& tick) {
   air::Commands commands;
   for (const auto& c : tick.commands()) Apply(c, tick.frame(), &commands);
   air::Step(model_, &state_, commands, Environment(tick), tick.dt());
+  if (replaying()) return;  // a replacement rebuilding past frames: they were published already
   msg::FrameStamp stamp;
   stamp.run(tick.run());
   stamp.frame(tick.frame());

@@ -36,6 +36,7 @@ struct Member {
   int32_t pid = 0;
   Clock::time_point last_heard;  // last announcement (heartbeat)
   uint64_t last_frame = 0;
+  uint64_t last_hash = 0;     // state hash acked with last_frame
   double last_step_us = 0;
   std::string failure;        // why it is not alive, if it failed
 };
@@ -125,6 +126,8 @@ struct Coordinator::Impl {
   bool status_dirty = true;
 
   Writer<msg::Tick> tick_writer;
+  Writer<msg::TickLog> tick_log_writer;
+  std::vector<msg::Tick> log;  // completed ticks a replay cannot infer (see TickLog in clock.idl)
   Writer<msg::WorldInfo> world_writer;
   Writer<msg::MapData> map_writer;
   Writer<msg::RunStatus> status_writer;
@@ -158,8 +161,9 @@ struct Coordinator::Impl {
       const std::string name = a.service().to_string();
       auto it = members.try_emplace(name).first;
       Member& m = it->second;
-      if (a.run() == run) {
+      if (a.run() == run && a.frame() >= m.last_frame) {
         m.last_frame = a.frame();
+        m.last_hash = a.state_hash();
         m.last_step_us = a.step_wall_us();
       }
       wake = barrier.OnAck(name, a.run(), a.frame(), a.state_hash()) == TickBarrier::AckResult::kCounted &&
@@ -292,8 +296,25 @@ struct Coordinator::Impl {
     status_dirty = false;
   }
 
+  // What a replacement of `service` needs to rebuild its state by replay.
+  void PublishTickLog(const std::string& service) {
+    msg::TickLog l;
+    l.run(run);
+    l.service(service);
+    auto it = members.find(service);
+    if (it != members.end()) {
+      l.last_frame(it->second.last_frame);
+      l.last_hash(it->second.last_hash);
+    }
+    l.frames(frame);
+    l.ticks(log);
+    spdlog::info("tick log of {} frame(s) ({} kept) published for a replacement of '{}'", frame, log.size(), service);
+    Post(tick_log_writer, std::move(l));
+  }
+
   void SetState(RunState next) {
     if (next == state) return;
+    if (next == RunState::RUN_FAULTED && !failed_service.empty()) PublishTickLog(failed_service);
     spdlog::info("run {} frame {}: {} -> {}", run, frame, RunStateName(state), RunStateName(next));
     state = next;
     status_dirty = true;
@@ -307,6 +328,7 @@ struct Coordinator::Impl {
     sim_time = 0;
     barrier.Close();
     commands.ResetActors();
+    log.clear();
     ticks_requested = 0;
     next_scheduled = 0;
     aliases.clear();
@@ -480,6 +502,8 @@ struct Coordinator::Impl {
     d.sim_time(sim_time);
     d.world_hash(barrier.WorldHash());
     barrier.Close();
+    // Keep what a replay cannot infer: the first tick, ticks with commands, dt changes.
+    if (log.empty() || !open_tick.commands().empty() || open_tick.dt() != log.back().dt()) log.push_back(open_tick);
     Post(done_writer, d);
     const double us = std::chrono::duration<double, std::micro>(now - tick_sent).count();
     barrier_us_sum += us;
@@ -498,6 +522,7 @@ Coordinator::Coordinator(Bus& bus, LaunchConfig config) : impl_(std::make_unique
   for (const auto& name : s.config.RequiredServices()) s.members[name].required = true;
   if (!s.config.map.empty()) s.LoadMapFile(s.config.map);
   s.tick_writer = Writer<msg::Tick>(bus, topics::kTick);
+  s.tick_log_writer = Writer<msg::TickLog>(bus, topics::kTickLog);
   s.world_writer = Writer<msg::WorldInfo>(bus, topics::kWorldInfo);
   s.map_writer = Writer<msg::MapData>(bus, topics::kMap);
   s.status_writer = Writer<msg::RunStatus>(bus, topics::kRunStatus);

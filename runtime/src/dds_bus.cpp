@@ -18,6 +18,7 @@
 #include "lockstep/runtime/bus.h"
 #include "lockstep/runtime/error.h"
 #include "lockstep/runtime/hash.h"
+#include "lockstep/runtime/log.h"
 
 namespace lockstep {
 namespace {
@@ -37,7 +38,12 @@ class DdsWriter final : public RawWriter {
  public:
   DdsWriter(dds::Publisher* pub, dds::DataWriter* writer) : pub_(pub), writer_(writer) {}
   ~DdsWriter() override { pub_->delete_datawriter(writer_); }
-  void Write(const void* sample) override { writer_->write(const_cast<void*>(sample)); }
+  void Write(const void* sample) override {
+    if (!writer_->write(const_cast<void*>(sample))) {
+      spdlog::error("DDS write on topic '{}' failed (sample too large for the type's bound or history full)",
+                    writer_->get_topic()->get_name());
+    }
+  }
   void AssertLiveliness() override { writer_->assert_liveliness(); }
   int MatchedReaders() const override {
     dds::PublicationMatchedStatus status;

@@ -30,6 +30,8 @@ struct ServiceRunner::Impl {
   std::deque<msg::Tick> ticks;
   std::optional<msg::WorldInfo> world;
   std::optional<msg::ServiceSnapshot> snapshot;  // our own last snapshot, for a replacement
+  std::optional<msg::TickLog> tick_log;          // the run's ticks, published when we failed
+  std::optional<msg::RunStatus> status;          // the coordinator's latest run status
 
   std::atomic<uint32_t> run{0};
   std::atomic<uint64_t> last_frame{0};
@@ -43,6 +45,8 @@ struct ServiceRunner::Impl {
   Reader<msg::Tick> tick_reader;
   Reader<msg::WorldInfo> world_reader;
   Reader<msg::ServiceSnapshot> snapshot_reader;
+  Reader<msg::TickLog> tick_log_reader;
+  Reader<msg::RunStatus> status_reader;
 
   void Announce(msg::ServiceState state) {
     msg::ServiceAnnounce a;
@@ -109,27 +113,93 @@ struct ServiceRunner::Impl {
     std::optional<msg::Tick> current;
     std::optional<msg::ServiceSnapshot> snap;
     {
-      std::lock_guard<std::mutex> lock(mu);
+      // World info and the current tick arrive on different topics: when the run is
+      // under way (its status shows completed frames), wait until the tick is here too.
+      std::unique_lock<std::mutex> lock(mu);
+      const auto deadline = Clock::now() + std::chrono::seconds(5);
+      auto status_known = [&] { return status && status->run() == run; };
+      auto tick_known = [&] { return !ticks.empty() && ticks.back().run() == run; };
+      cv.wait_until(lock, std::min<Clock::time_point>(deadline, Clock::now() + std::chrono::seconds(2)),
+                    [&] { return stop || status_known(); });
+      if (status_known() && status->frame() > 0) {
+        cv.wait_until(lock, deadline, [&] { return stop || tick_known(); });
+      }
       if (!ticks.empty() && ticks.back().run() == run) current = ticks.back();
       if (snapshot && snapshot->run() == run) snap = snapshot;
     }
-    if (current) {
-      // The run is under way: take over at the snapshot, or join stateless just before
-      // the current tick.
+    if (current && current->frame() > 1) {
+      // The run is under way: take over at our snapshot if there is one, else rebuild
+      // the state by replaying the run's ticks (published by the coordinator when the
+      // service we replace failed).
+      uint64_t restored = 0;
       if (snap && snap->frame() < current->frame()) {
         core.RestoreState(snap->state());
-        last_frame = snap->frame();
-        last_hash = core.StateHash();
-        spdlog::info("restored state of frame {} (hash {:016x})", last_frame.load(), last_hash);
-      } else {
-        last_frame = current->frame() - 1;
-        spdlog::info("joining run {} at frame {}", run, last_frame.load());
+        restored = snap->frame();
+        spdlog::info("restored the snapshot of frame {}", restored);
       }
+      if (std::optional<msg::TickLog> log = WaitTickLog(current->frame() - 1, stop)) {
+        restored = Replay(*log, restored, current->frame() - 1);
+      } else if (restored == 0) {
+        spdlog::warn("no snapshot and no tick log: joining run {} at frame {} without its past",
+                     run.load(), current->frame() - 1);
+      }
+      last_frame = current->frame() - 1;
+      last_hash = core.StateHash();
+    } else if (current) {
+      last_frame = current->frame() - 1;
     }
     // An ack before any tick tells the coordinator which writer is ours (liveliness).
     SendAck(last_frame, 0);
     Announce(msg::ServiceState::SERVICE_READY);
     joined = true;
+  }
+
+  // The tick log of the current run covering `frame`, if the coordinator has one.
+  std::optional<msg::TickLog> WaitTickLog(uint64_t frame, const std::atomic<bool>& stop) {
+    std::unique_lock<std::mutex> lock(mu);
+    const auto deadline = Clock::now() + std::chrono::seconds(5);
+    auto ready = [&] {
+      return tick_log && tick_log->run() == run && tick_log->service().to_string() == options.name &&
+             !tick_log->ticks().empty() && tick_log->frames() >= frame;
+    };
+    while (!stop && !ready() && Clock::now() < deadline) cv.wait_until(lock, deadline);
+    if (!ready()) return std::nullopt;
+    return tick_log;
+  }
+
+  // Steps the core through the logged ticks after `from` up to `to` without publishing;
+  // checks the state hash against what the failed service acknowledged.
+  uint64_t Replay(const msg::TickLog& log, uint64_t from, uint64_t to) {
+    core.replaying_ = true;
+    uint64_t n = 0;
+    const auto& kept = log.ticks();
+    size_t next = 0;
+    msg::Tick tick;
+    for (uint64_t f = 1; f <= to; ++f) {
+      if (next < kept.size() && kept[next].frame() == f) {
+        tick = kept[next++];
+      } else {  // inferred: no commands, dt unchanged
+        tick.commands({});
+        tick.frame(f);
+        tick.sim_time(tick.sim_time() + tick.dt());
+      }
+      if (f <= from) continue;
+      core.Step(tick);
+      ++n;
+    }
+    core.replaying_ = false;
+    const uint64_t hash = core.StateHash();
+    if (log.last_frame() == to && log.last_hash() != 0) {
+      if (hash == log.last_hash()) {
+        spdlog::info("rebuilt frame {} by replaying {} tick(s): state hash {:016x} matches", to, n, hash);
+      } else {
+        spdlog::error("replayed {} tick(s) to frame {} but the state hash {:016x} differs from the acknowledged {:016x}",
+                      n, to, hash, log.last_hash());
+      }
+    } else {
+      spdlog::info("rebuilt frame {} by replaying {} tick(s)", to, n);
+    }
+    return to;
   }
 
   void Handle(const msg::Tick& tick, const std::atomic<bool>& stop) {
@@ -170,6 +240,21 @@ ServiceRunner::ServiceRunner(Bus& bus, ServiceOptions options, ServiceCore& core
     if (snap.service() != s.options.name || info.writer_id == s.snapshot_writer.id()) return;
     std::lock_guard<std::mutex> lock(s.mu);
     s.snapshot = snap;
+  });
+  s.status_reader = Reader<msg::RunStatus>(bus, topics::kRunStatus, [&s](const msg::RunStatus& st, const SampleInfo&) {
+    {
+      std::lock_guard<std::mutex> lock(s.mu);
+      s.status = st;
+    }
+    s.cv.notify_all();
+  });
+  s.tick_log_reader = Reader<msg::TickLog>(bus, topics::kTickLog, [&s](const msg::TickLog& log, const SampleInfo&) {
+    spdlog::debug("tick log of run {} for '{}': {} tick(s)", log.run(), log.service().to_string(), log.ticks().size());
+    {
+      std::lock_guard<std::mutex> lock(s.mu);
+      s.tick_log = log;
+    }
+    s.cv.notify_all();
   });
   s.world_reader = Reader<msg::WorldInfo>(bus, topics::kWorldInfo, [&s](const msg::WorldInfo& w, const SampleInfo&) {
     {

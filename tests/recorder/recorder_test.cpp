@@ -77,11 +77,13 @@ void RunRecorded(msg::PerceptionMode mode, uint64_t ticks, std::map<uint64_t, st
   std::getline(in, line);  // header
   while (std::getline(in, line)) {
     std::stringstream ss(line);
-    std::string frame, time, commands, hash;
+    std::string frame, time, commands, shown, hash;
     std::getline(ss, frame, ',');
     std::getline(ss, time, ',');
     std::getline(ss, commands, ',');
+    std::getline(ss, shown, ',');
     std::getline(ss, hash, ',');
+    EXPECT_EQ(std::stoull(shown), mode == msg::PerceptionMode::PERCEPTION_PIPELINED ? std::stoull(frame) - 1 : std::stoull(frame));
     (*recorded)[std::stoull(frame)] = hash;
   }
   std::filesystem::remove_all(out);

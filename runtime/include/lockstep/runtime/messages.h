@@ -10,7 +10,7 @@
 #include "lockstep/runtime/bus.h"
 
 #define LOCKSTEP_MESSAGE_TYPES(X)                                                        \
-  X(Tick) X(Ack) X(ServiceAnnounce) X(ServiceSnapshot) X(RunStatus) X(FrameDone)         \
+  X(Tick) X(TickLog) X(Ack) X(ServiceAnnounce) X(ServiceSnapshot) X(RunStatus) X(FrameDone)         \
   X(WorldInfo) X(MapData) X(Command) X(CommandReply) X(GroundState) X(AirState)          \
   X(SimEvent) X(Image) X(PointCloud) X(RadarScan) X(Imu) X(Gnss) X(Barometer)            \
   X(Magnetometer) X(CollisionEvent) X(LaneInvasionEvent) X(ObstacleDetection)
@@ -26,6 +26,7 @@ LOCKSTEP_MESSAGE_TYPES(LOCKSTEP_DECLARE_TYPE_OPS)
 namespace topics {
 // Clock and membership.
 inline constexpr Topic<msg::Tick> kTick{"lockstep/tick", QosKind::kClock};
+inline constexpr Topic<msg::TickLog> kTickLog{"lockstep/tick_log", QosKind::kClock};
 inline constexpr Topic<msg::Ack> kAck{"lockstep/ack", QosKind::kAck};
 inline constexpr Topic<msg::ServiceAnnounce> kService{"lockstep/service", QosKind::kMembership};
 inline constexpr Topic<msg::ServiceSnapshot> kSnapshot{"lockstep/snapshot", QosKind::kMembership};

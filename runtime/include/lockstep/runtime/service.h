@@ -39,6 +39,14 @@ class ServiceCore {
   // receive thread, saving a thread hand-off per tick. A core that waits for inputs
   // (perception in strict mode) must return false, or it would block their delivery.
   virtual bool StepNeverWaits() const { return false; }
+
+  // True while a replacement replays past ticks to rebuild its state: Step must not
+  // publish (those frames were published by the service it replaces).
+  bool replaying() const { return replaying_; }
+
+ private:
+  friend class ServiceRunner;
+  bool replaying_ = false;
   virtual void RestoreState(const std::vector<uint8_t>& /*state*/) {}
 };
 

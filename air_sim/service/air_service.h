@@ -1,6 +1,7 @@
 #pragma once
 // The air_sim service core: turns the tick's commands into air::Commands, steps the
 // multirotor world (air::Step) and publishes AirState and events stamped with the frame.
+#include <atomic>
 #include <condition_variable>
 #include <memory>
 #include <mutex>
@@ -20,6 +21,9 @@ class AirService final : public ServiceCore {
   void BeginRun(const msg::WorldInfo& world) override;
   void Step(const msg::Tick& tick) override;
   uint64_t StateHash() const override { return air::StateHash(state_); }
+  // Without a ground_sim in the run the step reads only the tick: it may run on the
+  // receive thread. With one, it waits for the vehicles of frame k-1.
+  bool StepNeverWaits() const override { return !wait_for_ground_; }
 
   const air::World& model() const { return model_; }
   const air::WorldState& state() const { return state_; }
@@ -41,7 +45,7 @@ class AirService final : public ServiceCore {
   std::optional<msg::MapData> map_;                       // latest map from the coordinator
   uint64_t town_hash_ = 0;                                // map whose mesh is in model_.statics
   std::shared_ptr<const air::StaticMesh> town_mesh_;
-  bool wait_for_ground_ = false;  // a ground_sim is in the run: use its vehicles (Jacobi, frame k-1)
+  std::atomic<bool> wait_for_ground_{false};  // a ground_sim is in the run: use its vehicles (Jacobi, frame k-1)
   air::World model_;
   air::WorldState state_;
   std::map<uint32_t, std::string> blueprints_;

@@ -376,6 +376,7 @@ static void usage(void) {
           "  --name           service name (a required service in the launch config)\n"
           "  --domain         DDS domain id (default 0)\n"
           "  --ticks-file     write the per-tick lines here instead of stdout\n"
+          "  --config         launch config (accepted for `lockstep up`; only --domain is used)\n"
           "  --wait-state     at tick k wait for GroundState and AirState of frame >= k-1\n"
           "  --state-timeout-ms  bound of that wait (default 2000)\n"
           "  --world-timeout-s   how long to wait for the coordinator (default 30)\n"
@@ -424,6 +425,8 @@ static bool parse_args(int argc, char **argv, options *o) {
       o->domain = (int)n, ++i;
     } else if (strcmp(a, "--ticks-file") == 0) {
       o->ticks_file = v, ++i;
+    } else if (strcmp(a, "--config") == 0) {
+      ++i;  /* `lockstep up` passes the launch config; --domain (also passed) is all we need */
     } else if (strcmp(a, "--state-timeout-ms") == 0) {
       if (!parse_int(v, 0, 600000, &n)) return false;
       o->state_timeout = DDS_MSECS(n), ++i;

@@ -32,7 +32,8 @@ struct Member {
   std::string kind;
   bool required = false;
   bool ready = false;         // announced READY since it (re)joined
-  bool alive = false;         // ready and its ack writer's liveliness holds
+  bool alive = false;         // ready and heard from within the heartbeat timeout
+  uint64_t stalled_frame = 0; // it missed the service_timeout on this frame; alive again only once it acks it
   int32_t pid = 0;
   Clock::time_point last_heard;  // last announcement (heartbeat)
   uint64_t last_frame = 0;
@@ -161,6 +162,12 @@ struct Coordinator::Impl {
       const std::string name = a.service().to_string();
       auto it = members.try_emplace(name).first;
       Member& m = it->second;
+      if (m.stalled_frame != 0 && a.run() == run && a.frame() >= m.stalled_frame) {
+        m.stalled_frame = 0;  // it caught up: healthy again
+        m.alive = true;
+        m.failure.clear();
+        status_dirty = true;
+      }
       if (a.run() == run && a.frame() >= m.last_frame) {
         m.last_frame = a.frame();
         m.last_hash = a.state_hash();
@@ -198,7 +205,10 @@ struct Coordinator::Impl {
       Member& m = members[a.service().to_string()];
       m.kind = a.kind().to_string();
       m.last_heard = Clock::now();
-      if (a.state() == msg::ServiceState::SERVICE_READY) {
+      if (m.stalled_frame != 0 && m.pid != a.pid()) m.stalled_frame = 0;  // a replacement process
+      if (a.state() == msg::ServiceState::SERVICE_READY && m.stalled_frame != 0) {
+        // Heartbeats alone do not clear a stall: the service must finish the frame.
+      } else if (a.state() == msg::ServiceState::SERVICE_READY) {
         if (!m.alive) status_dirty = true;
         if (!m.alive) spdlog::info("service '{}' ({}, pid {} on {}) joined at frame {}", a.service().to_string(),
                                    a.kind().to_string(), a.pid(), a.host().to_string(), a.last_frame());
@@ -516,6 +526,7 @@ struct Coordinator::Impl {
 
 Coordinator::Coordinator(Bus& bus, LaunchConfig config) : impl_(std::make_unique<Impl>(bus, std::move(config))) {
   auto& s = *impl_;
+  ValidateWorldSettings(s.config.world, s.config.source + ": world");
   s.seed = s.config.seed;
   s.settings = s.config.world;
   s.weather = DefaultWeather();
@@ -606,6 +617,7 @@ int Coordinator::Run(const std::atomic<bool>& stop) {
         auto it = s.members.find(s.failed_service);
         if (it != s.members.end()) {
           it->second.alive = false;
+          it->second.stalled_frame = s.barrier.frame();
           it->second.failure = "timed out on frame " + std::to_string(s.barrier.frame());
         }
         spdlog::error("stopping the clock: {}", s.failure_reason);

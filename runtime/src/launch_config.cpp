@@ -134,7 +134,7 @@ ScheduledCommand LoadStep(YamlMap m, uint64_t index) {
     m.Require("as", &s.alias);
     msg::Pose pose;
     if (YAML::Node at = m.Child("at")) pose.position(Vec(m, "at", at));
-    double yaw = 0;
+    double yaw = 0;  // rad, ENU heading
     m.Get("yaw", &yaw);
     pose.orientation().w(std::cos(yaw / 2));
     pose.orientation().z(std::sin(yaw / 2));
@@ -167,12 +167,15 @@ ScheduledCommand LoadStep(YamlMap m, uint64_t index) {
     if (m.Get("velocity", &x)) d.velocity(x);
     if (m.Get("duration", &x)) d.duration(x);
     if (m.Get("timeout", &x)) d.timeout(x);
+    // Without `yaw` the heading is kept (AirSim's default YawMode: rate 0).
+    msg::YawMode y;
+    y.is_rate(true);
+    y.value(0);
     if (m.Get("yaw", &x)) {
-      msg::YawMode y;
       y.is_rate(drone == "rotate_by_yaw_rate");
       y.value(x);
-      d.yaw(y);
     }
+    d.yaw(y);
     body.drone(d);
   } else {
     m.Fail(m.Child("frame"), "spawn", "or 'drone' is required in a scenario step");
@@ -229,6 +232,9 @@ LaunchConfig LoadLaunchConfig(const std::string& file) {
   // Paths in a config are relative to the config file.
   const std::filesystem::path dir = std::filesystem::path(file).parent_path();
   if (!c.map.empty() && std::filesystem::path(c.map).is_relative()) c.map = (dir / c.map).lexically_normal().string();
+  if (!c.qos_file.empty() && std::filesystem::path(c.qos_file).is_relative()) {
+    c.qos_file = (dir / c.qos_file).lexically_normal().string();
+  }
   if (!c.output_dir.empty() && std::filesystem::path(c.output_dir).is_relative()) {
     c.output_dir = (dir / c.output_dir).lexically_normal().string();
   }

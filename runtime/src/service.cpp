@@ -148,7 +148,7 @@ struct ServiceRunner::Impl {
     } else if (current) {
       last_frame = current->frame() - 1;
     }
-    // An ack before any tick tells the coordinator which writer is ours (liveliness).
+    // An ack before the first tick tells the coordinator where we stand.
     SendAck(last_frame, 0);
     Announce(msg::ServiceState::SERVICE_READY);
     joined = true;

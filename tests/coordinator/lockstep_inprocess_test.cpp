@@ -2,6 +2,7 @@
 // barrier's guarantees, command sequencing and rejection, synchronous mode, reset.
 #include <gtest/gtest.h>
 
+#include <condition_variable>
 #include <limits>
 #include <map>
 #include <mutex>
@@ -213,6 +214,73 @@ TEST_F(InProcessLockstep, ResetStartsANewRunFromFrameOne) {
   ASSERT_TRUE(observer_->WaitUntil([&] { return observer_->status() && observer_->status()->run() == 2 && observer_->status()->frame() >= 5; }, 10s));
   // Every service restarted its hash chain from the new seed: they agree again.
   EXPECT_TRUE(observer_->WaitUntil([&] { return ledger_.violations.empty(); }, 1s));
+}
+
+}  // namespace
+}  // namespace lockstep
+
+namespace lockstep {
+namespace {
+
+using namespace std::chrono_literals;
+
+// A step that blocks until released: the service keeps its heartbeats (it is alive) but
+// does not finish the frame, so only the per-tick timeout can catch it.
+class StuckCore : public NoopCore {
+ public:
+  void Step(const msg::Tick& tick) override {
+    if (tick.frame() == stuck_at) {
+      std::unique_lock<std::mutex> lock(mu);
+      cv.wait(lock, [&] { return released; });
+    }
+    NoopCore::Step(tick);
+  }
+  bool StepNeverWaits() const override { return false; }
+  void Release() {
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      released = true;
+    }
+    cv.notify_all();
+  }
+  uint64_t stuck_at = 30;
+  std::mutex mu;
+  std::condition_variable cv;
+  bool released = false;
+};
+
+TEST(ServiceTimeout, AStuckStepFaultsTheRunUntilTheFrameIsDone) {
+  LaunchConfig c;
+  c.world.service_timeout(0.3);
+  c.services.push_back({"fine", "noop", "", {}, true, false, "never"});
+  c.services.push_back({"stuck", "noop", "", {}, true, false, "never"});
+  auto bus = CreateInProcessBus();
+  testing::Observer obs(*bus);
+  Coordinator coordinator(*bus, c);
+  NoopCore fine;
+  StuckCore stuck;
+  ServiceRunner r1(*bus, ServiceOptions{"fine", "noop", false}, fine);
+  ServiceRunner r2(*bus, ServiceOptions{"stuck", "noop", false}, stuck);
+  std::atomic<bool> stop{false};
+  std::thread t1([&] { r1.Run(stop); });
+  std::thread t2([&] { r2.Run(stop); });
+  std::thread tc([&] { coordinator.Run(stop); });
+  auto faulted = [&] {
+    auto s = obs.status();
+    return s && s->state() == msg::RunState::RUN_FAULTED && s->failed_service().to_string() == "stuck";
+  };
+  EXPECT_TRUE(obs.WaitUntil(faulted, 10s));
+  EXPECT_NE(obs.status()->reason().to_string().find("did not acknowledge frame 30"), std::string::npos) << obs.status()->reason();
+  // Its heartbeats go on, yet the run stays faulted while the frame is unfinished.
+  EXPECT_FALSE(obs.WaitUntil([&] { return !faulted(); }, 1s)) << "a live but stuck service must not resume the run";
+  EXPECT_EQ(obs.last_frame(), 29u);
+  stuck.Release();
+  EXPECT_TRUE(obs.WaitUntil([&] { return obs.last_frame() >= 60; }, 10s)) << "resumes once the frame is done";
+  stop = true;
+  stuck.Release();
+  tc.join();
+  t1.join();
+  t2.join();
 }
 
 }  // namespace

@@ -19,6 +19,8 @@ struct ServiceLaunch {
   std::string restart = "never";    // never | on-failure (the launcher starts a replacement)
 };
 
+msg::WorldSettings DefaultWorldSettings();
+
 // A command the coordinator itself issues at a given frame, so a scripted scenario is as
 // deterministic as the run (it is sequenced before any client command of that frame).
 struct ScheduledCommand {
@@ -38,14 +40,13 @@ struct LaunchConfig {
   std::string map;                    // path to an .xodr file (scene beside it as .scene.yaml); empty = none
   uint64_t ticks = 0;                 // free-running: stop after this many ticks (0 = run until stopped)
   std::string output_dir;             // where services write outputs; empty = none
-  msg::WorldSettings world;           // see DefaultWorldSettings()
+  msg::WorldSettings world = DefaultWorldSettings();
   std::vector<ServiceLaunch> services;
   std::vector<ScheduledCommand> scenario;  // sorted by frame, stable
 
   std::vector<std::string> RequiredServices() const;
 };
 
-msg::WorldSettings DefaultWorldSettings();
 LaunchConfig LoadLaunchConfig(const std::string& file);
 LaunchConfig ParseLaunchConfig(const std::string& yaml_text, const std::string& source_name);
 // Checks ranges and cross-field rules; throws InputError naming the field.

@@ -73,7 +73,7 @@ struct ServiceRunner::Impl {
   }
 
   void PublishSnapshot() {
-    if (!can_snapshot) return;
+    if (!can_snapshot || options.snapshot_period == 0 || last_frame % options.snapshot_period != 0) return;
     std::vector<uint8_t> state = core.SaveState();
     if (state.empty()) {
       can_snapshot = false;  // stateless or not restorable: stop trying

@@ -19,6 +19,8 @@ struct ServiceOptions {
   bool perception = false;           // render / sensors: read-only phase
   double heartbeat_period_s = 0.1;   // s, how often the service re-announces itself (liveliness)
   double world_info_timeout_s = 30;  // s, how long to wait for the coordinator at start
+  uint64_t snapshot_period = 200;    // frames between state snapshots (a replacement restores
+                                     // the latest, then replays the tick log from there)
 };
 
 // Implemented by each service; called on the runner's thread only.

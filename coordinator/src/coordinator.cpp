@@ -13,6 +13,7 @@
 
 #include "lockstep/coordinator/command_processor.h"
 #include "lockstep/coordinator/tick_barrier.h"
+#include "lockstep/runtime/command_builders.h"
 #include "lockstep/runtime/error.h"
 #include "lockstep/runtime/hash.h"
 #include "lockstep/runtime/log.h"
@@ -68,17 +69,6 @@ msg::WeatherParameters DefaultWeather() {
   w.rayleigh_scattering_scale(0.0331f);
   w.dust_storm(0);
   return w;
-}
-
-const char* RunStateName(RunState s) {
-  switch (s) {
-    case RunState::RUN_WAITING_FOR_SERVICES: return "waiting for services";
-    case RunState::RUN_READY: return "ready";
-    case RunState::RUN_RUNNING: return "running";
-    case RunState::RUN_FAULTED: return "faulted";
-    case RunState::RUN_STOPPED: return "stopped";
-  }
-  return "?";
 }
 
 }  // namespace

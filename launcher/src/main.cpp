@@ -13,6 +13,7 @@
 #include <mutex>
 #include <optional>
 
+#include "lockstep/runtime/command_builders.h"
 #include "lockstep/runtime/error.h"
 #include "lockstep/runtime/launch_config.h"
 #include "lockstep/runtime/log.h"
@@ -49,18 +50,6 @@ int Up(const std::string& config_file, int domain) {
   return supervisor.Run(g_stop);
 }
 
-const char* StateName(lockstep::msg::RunState s) {
-  using lockstep::msg::RunState;
-  switch (s) {
-    case RunState::RUN_WAITING_FOR_SERVICES: return "waiting for services";
-    case RunState::RUN_READY: return "ready";
-    case RunState::RUN_RUNNING: return "running";
-    case RunState::RUN_FAULTED: return "faulted";
-    case RunState::RUN_STOPPED: return "stopped";
-  }
-  return "?";
-}
-
 int Status(int domain, const std::string& profile, double wait_s, bool json) {
   auto bus = lockstep::CreateDdsBus({domain, "", profile, "lockstep-status"});
   std::mutex mu;
@@ -80,7 +69,7 @@ int Status(int domain, const std::string& profile, double wait_s, bool json) {
   const auto& s = *status;
   if (json) {
     std::printf("{\"run\":%u,\"state\":\"%s\",\"frame\":%llu,\"sim_time\":%.6f,\"tick_rate_hz\":%.2f,\"real_time_factor\":%.3f,\"members\":[",
-                s.run(), StateName(s.state()), static_cast<unsigned long long>(s.frame()), s.sim_time(), s.tick_rate_hz(),
+                s.run(), lockstep::RunStateName(s.state()), static_cast<unsigned long long>(s.frame()), s.sim_time(), s.tick_rate_hz(),
                 s.real_time_factor());
     for (size_t i = 0; i < s.members().size(); ++i) {
       const auto& m = s.members()[i];
@@ -91,7 +80,7 @@ int Status(int domain, const std::string& profile, double wait_s, bool json) {
     std::printf("],\"failed_service\":\"%s\",\"reason\":\"%s\"}\n", s.failed_service().c_str(), s.reason().c_str());
     return 0;
   }
-  std::printf("run %u: %s, frame %llu, sim time %.2f s, %.1f ticks/s (real-time factor %.2f)\n", s.run(), StateName(s.state()),
+  std::printf("run %u: %s, frame %llu, sim time %.2f s, %.1f ticks/s (real-time factor %.2f)\n", s.run(), lockstep::RunStateName(s.state()),
               static_cast<unsigned long long>(s.frame()), s.sim_time(), s.tick_rate_hz(), s.real_time_factor());
   if (s.failed_service().size() > 0) std::printf("failed: %s: %s\n", s.failed_service().c_str(), s.reason().c_str());
   std::printf("%-20s %-14s %-6s %-9s %-12s %s\n", "SERVICE", "KIND", "ALIVE", "REQUIRED", "LAST FRAME", "STEP (us)");

@@ -6,6 +6,7 @@
 #include <map>
 #include <set>
 
+#include "lockstep/runtime/command_builders.h"
 #include "lockstep/runtime/yaml_config.h"
 
 namespace lockstep {
@@ -129,27 +130,14 @@ ScheduledCommand LoadStep(YamlMap m, uint64_t index) {
   std::string spawn, drone;
   msg::CommandBody body;
   if (m.Get("spawn", &spawn)) {
-    msg::SpawnActor a;
-    a.blueprint(spawn);
     m.Require("as", &s.alias);
-    msg::Pose pose;
-    if (YAML::Node at = m.Child("at")) pose.position(Vec(m, "at", at));
+    msg::Vector3 at;
+    if (YAML::Node n = m.Child("at")) at = Vec(m, "at", n);
     double yaw = 0;  // rad, ENU heading
     m.Get("yaw", &yaw);
-    pose.orientation().w(std::cos(yaw / 2));
-    pose.orientation().z(std::sin(yaw / 2));
-    a.transform(pose);
     std::map<std::string, std::string> attrs;
     m.Get("attributes", &attrs);
-    std::vector<msg::BlueprintAttribute> list;
-    for (const auto& [k, v] : attrs) {
-      msg::BlueprintAttribute b;
-      b.key(k);
-      b.value(v);
-      list.push_back(b);
-    }
-    a.attributes(list);
-    body.spawn_actor(a);
+    body = SpawnBody(spawn, MakePose(at.x(), at.y(), at.z(), yaw), AttributeList(attrs.begin(), attrs.end()));
   } else if (m.Get("drone", &drone)) {
     msg::DroneCommand d;
     m.Require("actor", &s.actor_alias);

@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "air_service.h"
+#include "lockstep/runtime/command_builders.h"
 #include "lockstep/coordinator/coordinator.h"
 #include "lockstep/map/scene.h"
 #include "observer.h"
@@ -53,23 +54,8 @@ class AirServiceTest : public ::testing::Test {
     EXPECT_TRUE(r.has_value());
     return r.value_or(msg::CommandReply{});
   }
-  uint32_t SpawnDrone(double x, double y, std::vector<std::pair<std::string, std::string>> attrs = {}) {
-    msg::SpawnActor s;
-    s.blueprint("drone.generic_quad");
-    s.transform().position().x(x);
-    s.transform().position().y(y);
-    s.transform().orientation().w(1);
-    std::vector<msg::BlueprintAttribute> list;
-    for (auto& [k, v] : attrs) {
-      msg::BlueprintAttribute a;
-      a.key(k);
-      a.value(v);
-      list.push_back(a);
-    }
-    s.attributes(list);
-    msg::CommandBody b;
-    b.spawn_actor(s);
-    auto r = Send(b);
+  uint32_t SpawnDrone(double x, double y, const AttributeList& attrs = {}) {
+    auto r = Send(SpawnBody("drone.generic_quad", MakePose(x, y, 0), attrs));
     EXPECT_TRUE(r.accepted()) << r.reason();
     return r.actor();
   }

@@ -1,4 +1,5 @@
 #include "lockstep/coordinator/command_processor.h"
+#include "lockstep/runtime/command_builders.h"
 
 #include <gtest/gtest.h>
 
@@ -16,24 +17,8 @@ msg::Command Make(msg::CommandBody body, uint64_t seq = 1) {
   return c;
 }
 
-msg::Command Spawn(const std::string& blueprint, std::vector<std::pair<std::string, std::string>> attrs = {}, uint32_t parent = 0) {
-  msg::SpawnActor s;
-  s.blueprint(blueprint);
-  std::vector<msg::BlueprintAttribute> list;
-  for (auto& [k, v] : attrs) {
-    msg::BlueprintAttribute a;
-    a.key(k);
-    a.value(v);
-    list.push_back(a);
-  }
-  s.attributes(list);
-  msg::Pose p;
-  p.orientation().w(1.0);
-  s.transform(p);
-  s.parent(parent);
-  msg::CommandBody b;
-  b.spawn_actor(s);
-  return Make(b);
+msg::Command Spawn(const std::string& blueprint, const AttributeList& attrs = {}, uint32_t parent = 0) {
+  return Make(SpawnBody(blueprint, MakePose(0, 0, 0), attrs, parent));
 }
 
 msg::Command Control(uint32_t actor, float throttle, float steer) {

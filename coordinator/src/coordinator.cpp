@@ -13,6 +13,8 @@
 
 #include "lockstep/coordinator/command_processor.h"
 #include "lockstep/coordinator/tick_barrier.h"
+#include "lockstep/map/map.h"
+#include "lockstep/map/scene.h"
 #include "lockstep/runtime/command_builders.h"
 #include "lockstep/runtime/error.h"
 #include "lockstep/runtime/hash.h"
@@ -49,6 +51,34 @@ std::string ReadFile(const std::string& path) {
   std::stringstream ss;
   ss << in.rdbuf();
   return ss.str();
+}
+
+// A map as the coordinator publishes it, checked by parsing it once.
+struct MapContent {
+  std::string name;
+  std::string opendrive;
+  std::string scene;
+  size_t traffic_lights = 0;  // they become actors 1..n of every run, in signal order
+};
+
+// Parses OpenDRIVE and scene; a malformed map throws InputError naming element and line.
+MapContent ParseMap(std::string name, std::string opendrive, std::string scene) {
+  MapContent m{std::move(name), std::move(opendrive), std::move(scene), 0};
+  try {
+    const map::Map parsed = map::Map::FromString(m.opendrive, m.name + ".xodr");
+    if (!m.scene.empty()) map::SceneFromYaml(m.scene, m.name + ".scene.yaml");
+    m.traffic_lights = parsed.TrafficLights().size();
+  } catch (const std::exception& e) {
+    throw lockstep::InputError(std::string("map '") + m.name + "': " + e.what());
+  }
+  return m;
+}
+
+// `path` to an .xodr file; its scene is <stem>.scene.yaml beside it, if present.
+MapContent ReadMap(const std::string& path) {
+  std::filesystem::path p(path);
+  std::filesystem::path scene = p.parent_path() / (p.stem().string() + ".scene.yaml");
+  return ParseMap(p.stem().string(), ReadFile(path), std::filesystem::exists(scene) ? ReadFile(scene.string()) : std::string());
 }
 
 msg::WeatherParameters DefaultWeather() {
@@ -102,6 +132,7 @@ struct Coordinator::Impl {
   std::string map_name;
   std::string map_opendrive;
   std::string map_scene;
+  size_t map_traffic_lights = 0;
   std::string failed_service;
   std::string failure_reason;
   size_t next_scheduled = 0;                  // index into config.scenario
@@ -255,12 +286,17 @@ struct Coordinator::Impl {
     Post(map_writer, m);
   }
 
-  void LoadMapFile(const std::string& path) {
-    map_opendrive = ReadFile(path);
-    std::filesystem::path p(path);
-    map_name = p.stem().string();
-    std::filesystem::path scene = p.parent_path() / (p.stem().string() + ".scene.yaml");
-    map_scene = std::filesystem::exists(scene) ? ReadFile(scene.string()) : std::string();
+  void UseMap(MapContent m) {
+    map_name = std::move(m.name);
+    map_opendrive = std::move(m.opendrive);
+    map_scene = std::move(m.scene);
+    map_traffic_lights = m.traffic_lights;
+  }
+
+  // Actors every run starts with: the map's traffic lights, ids 1..n in signal order
+  // (ground_sim derives the same order from the same map).
+  void RegisterMapActors() {
+    for (size_t i = 0; i < map_traffic_lights; ++i) commands.AddMapActor("traffic.traffic_light", ActorKind::kTrafficLight);
   }
 
   void PublishStatus(Clock::time_point now) {
@@ -328,6 +364,7 @@ struct Coordinator::Impl {
     sim_time = 0;
     barrier.Close();
     commands.ResetActors();
+    RegisterMapActors();
     log.clear();
     ticks_requested = 0;
     next_scheduled = 0;
@@ -344,16 +381,33 @@ struct Coordinator::Impl {
       inbox.pop_front();
       msg::CommandReply reply;
       const auto kind = c.body()._d();
-      // A map given by name must exist before the command is accepted.
-      if (kind == msg::CommandKind::CMD_LOAD_MAP && c.body().load_map().opendrive().empty() &&
-          c.body().load_map().name().to_string() != map_name &&
-          !std::filesystem::exists(c.body().load_map().name().to_string())) {
-        reply.client(c.client());
-        reply.sequence_number(c.sequence_number());
-        reply.accepted(false);
-        reply.reason("unknown map '" + c.body().load_map().name().to_string() + "': give a path to an .xodr file or inline OpenDRIVE");
-        Post(reply_writer, reply);
-        continue;
+      // A map must load and parse before the command is accepted.
+      std::optional<MapContent> new_map;
+      if (kind == msg::CommandKind::CMD_LOAD_MAP) {
+        const auto& lm = c.body().load_map();
+        std::string why;
+        try {
+          if (!lm.opendrive().empty()) {
+            new_map = ParseMap(lm.name().to_string().empty() ? "inline" : lm.name().to_string(), lm.opendrive(), lm.scene());
+          } else if (lm.name().to_string() != map_name) {
+            if (!std::filesystem::exists(lm.name().to_string())) {
+              why = "unknown map '" + lm.name().to_string() + "': give a path to an .xodr file or inline OpenDRIVE";
+            } else {
+              new_map = ReadMap(lm.name().to_string());
+            }
+          }
+        } catch (const std::exception& e) {
+          why = e.what();
+        }
+        if (!why.empty()) {
+          reply.client(c.client());
+          reply.sequence_number(c.sequence_number());
+          reply.accepted(false);
+          reply.reason(why.substr(0, 511));
+          spdlog::warn("rejected load_map from '{}': {}", c.client().to_string(), why);
+          Post(reply_writer, reply);
+          continue;
+        }
       }
       reply = commands.Submit(c, run, frame + 1 + (barrier.open() ? 1 : 0), settings.synchronous_mode());
       if (reply.accepted()) {
@@ -377,14 +431,7 @@ struct Coordinator::Impl {
             break;
           case msg::CommandKind::CMD_LOAD_MAP: {
             commands.TakePending();
-            const auto& lm = c.body().load_map();
-            if (!lm.opendrive().empty()) {
-              map_opendrive = lm.opendrive();
-              map_scene = lm.scene();
-              map_name = lm.name().to_string().empty() ? "inline" : lm.name().to_string();
-            } else if (lm.name().to_string() != map_name) {
-              LoadMapFile(lm.name().to_string());
-            }
+            if (new_map) UseMap(std::move(*new_map));
             NewRun(0);
             reply.run(run);
             reply.frame(1);
@@ -521,7 +568,8 @@ Coordinator::Coordinator(Bus& bus, LaunchConfig config) : impl_(std::make_unique
   s.settings = s.config.world;
   s.weather = DefaultWeather();
   for (const auto& name : s.config.RequiredServices()) s.members[name].required = true;
-  if (!s.config.map.empty()) s.LoadMapFile(s.config.map);
+  if (!s.config.map.empty()) s.UseMap(ReadMap(s.config.map));
+  s.RegisterMapActors();
   s.tick_writer = Writer<msg::Tick>(bus, topics::kTick);
   s.tick_log_writer = Writer<msg::TickLog>(bus, topics::kTickLog);
   s.world_writer = Writer<msg::WorldInfo>(bus, topics::kWorldInfo);

@@ -3,6 +3,8 @@
 #include <gtest/gtest.h>
 
 #include <condition_variable>
+#include <fstream>
+#include <sstream>
 #include <limits>
 #include <map>
 #include <mutex>
@@ -281,6 +283,62 @@ TEST(ServiceTimeout, AStuckStepFaultsTheRunUntilTheFrameIsDone) {
   tc.join();
   t1.join();
   t2.join();
+}
+
+}  // namespace
+}  // namespace lockstep
+
+namespace lockstep {
+namespace {
+
+using namespace std::chrono_literals;
+
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+TEST_F(InProcessLockstep, LoadMapChecksTheMapAndItsTrafficLightsBecomeActors) {
+  Start(Config(1, false));
+  msg::LoadMap bad;
+  bad.name("broken");
+  bad.opendrive("<OpenDRIVE>\n<header revMajor=\"1\" revMinor=\"4\"/>\n<road length=\"x\" id=\"1\" junction=\"-1\"></road>\n</OpenDRIVE>");
+  msg::CommandBody b;
+  b.load_map(bad);
+  auto rejected = observer_->WaitReply(observer_->Send(b), 10s);
+  ASSERT_TRUE(rejected);
+  EXPECT_FALSE(rejected->accepted());
+  EXPECT_NE(rejected->reason().to_string().find("broken.xodr:3"), std::string::npos) << rejected->reason();
+  EXPECT_EQ(observer_->status()->run(), 1u) << "a rejected map leaves the run alone";
+
+  msg::LoadMap town;
+  town.name("Town02");
+  town.opendrive(ReadText(std::string(LOCKSTEP_TEST_SHARED_DIR) + "/maps/carla/Town02.xodr"));
+  b.load_map(town);
+  auto accepted = observer_->WaitReply(observer_->Send(b), 10s);
+  ASSERT_TRUE(accepted && accepted->accepted()) << (accepted ? accepted->reason().to_string() : "no reply");
+  EXPECT_EQ(accepted->run(), 2u);
+  // Traffic lights are actors 1..n: a command to light 1 is accepted, a car is not a light.
+  msg::TrafficLightCommand light;
+  light.actor(1);
+  light.state(msg::TrafficLightColor::LIGHT_GREEN);
+  light.green_time(10);
+  light.yellow_time(-1);
+  light.red_time(-1);
+  msg::CommandBody lb;
+  lb.traffic_light(light);
+  auto ok = observer_->WaitReply(observer_->Send(lb), 10s);
+  ASSERT_TRUE(ok);
+  EXPECT_TRUE(ok->accepted()) << ok->reason();
+  const uint32_t car = SpawnCar();
+  EXPECT_GT(car, 1u) << "spawned actors come after the map's lights";
+  light.actor(car);
+  lb.traffic_light(light);
+  auto wrong = observer_->WaitReply(observer_->Send(lb), 10s);
+  ASSERT_TRUE(wrong);
+  EXPECT_FALSE(wrong->accepted());
 }
 
 }  // namespace

@@ -97,3 +97,86 @@ TEST(Launcher, MissingServiceProgramIsNamed) {
 
 }  // namespace
 }  // namespace lockstep::testing
+
+namespace lockstep::testing {
+namespace {
+
+using namespace std::chrono_literals;
+
+std::string NoopConfig(const std::string& restart) {
+  return "name: supervise\ndomain_id: " + std::to_string(TestDomain()) +
+         "\nparticipant_profile: lockstep.participant.loopback\nworld:\n  real_time_factor: 1\n"
+         "services:\n  - {name: steady, kind: noop}\n  - {name: fragile, kind: noop, restart: " + restart + "}\n";
+}
+
+// Waits until `text` appears in the process's output.
+bool WaitOutput(Process& p, const std::string& text, std::chrono::milliseconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  while (std::chrono::steady_clock::now() < deadline) {
+    if (p.Output().find(text) != std::string::npos) return true;
+    if (!p.Running()) return p.Output().find(text) != std::string::npos;
+    p.Wait(20ms);
+  }
+  return false;
+}
+
+TEST(Launcher, StatusShowsMembersFrameAndRate) {
+  Process up({Bin("lockstep"), "up", WriteTempFile("status.yaml", NoopConfig("never"))});
+  ASSERT_TRUE(WaitOutput(up, "waiting for services -> running", 30s)) << up.Output();
+  Process status({Bin("lockstep"), "status", "--domain", std::to_string(TestDomain()), "--participant-profile",
+                  "lockstep.participant.loopback", "--json"});
+  auto code = status.Wait(15s);
+  ASSERT_TRUE(code);
+  ASSERT_EQ(*code, 0) << status.Output();
+  const std::string out = status.Output();
+  EXPECT_NE(out.find("\"state\":\"running\""), std::string::npos) << out;
+  EXPECT_NE(out.find("\"service\":\"steady\""), std::string::npos) << out;
+  EXPECT_NE(out.find("\"service\":\"fragile\""), std::string::npos) << out;
+  EXPECT_NE(out.find("\"tick_rate_hz\":"), std::string::npos) << out;
+  up.Signal(SIGINT);
+  EXPECT_TRUE(up.Wait(15s));
+}
+
+// The pid of a service, from the coordinator's "joined" line in the merged log.
+pid_t JoinedPid(const std::string& log, const std::string& name, size_t nth = 0) {
+  const std::string key = "service '" + name + "' (noop, pid ";
+  size_t pos = 0;
+  for (size_t i = 0; i <= nth; ++i) {
+    pos = log.find(key, pos);
+    if (pos == std::string::npos) return 0;
+    pos += key.size();
+  }
+  return static_cast<pid_t>(std::stol(log.substr(pos)));
+}
+
+TEST(Launcher, AServiceThatDiesStopsTheSimulation) {
+  Process up({Bin("lockstep"), "up", WriteTempFile("fail.yaml", NoopConfig("never"))});
+  ASSERT_TRUE(WaitOutput(up, "waiting for services -> running", 30s)) << up.Output();
+  const pid_t fragile = JoinedPid(up.Output(), "fragile");
+  ASSERT_GT(fragile, 0) << up.Output();
+  kill(fragile, SIGKILL);
+  auto code = up.Wait(20s);
+  ASSERT_TRUE(code) << "lockstep up must stop when a service fails hard";
+  EXPECT_NE(*code, 0);
+  EXPECT_NE(up.Output().find("fragile     | exited with 137: stopping the simulation"), std::string::npos) << up.Output();
+  EXPECT_NE(kill(JoinedPid(up.Output(), "steady"), 0), 0) << "the other service was stopped too";
+}
+
+TEST(Launcher, RestartOnFailureStartsAReplacementAndTheRunResumes) {
+  Process up({Bin("lockstep"), "up", WriteTempFile("restart.yaml", NoopConfig("on-failure"))});
+  ASSERT_TRUE(WaitOutput(up, "waiting for services -> running", 30s)) << up.Output();
+  const pid_t fragile = JoinedPid(up.Output(), "fragile");
+  ASSERT_GT(fragile, 0);
+  kill(fragile, SIGKILL);
+  ASSERT_TRUE(WaitOutput(up, "starting a replacement (1 of 5)", 20s)) << up.Output();
+  ASSERT_TRUE(WaitOutput(up, "faulted -> running", 30s)) << up.Output();
+  EXPECT_GT(JoinedPid(up.Output(), "fragile", 1), 0) << "the replacement joined";
+  EXPECT_TRUE(up.Running());
+  up.Signal(SIGINT);
+  auto code = up.Wait(15s);
+  ASSERT_TRUE(code);
+  EXPECT_EQ(*code, 0);
+}
+
+}  // namespace
+}  // namespace lockstep::testing

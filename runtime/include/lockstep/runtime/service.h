@@ -34,9 +34,10 @@ class ServiceCore {
   virtual void Step(const msg::Tick& tick) = 0;
   // FNV-1a of the state after the last step (0: the service keeps no state).
   virtual uint64_t StateHash() const { return 0; }
-  // Full state for a replacement process. Empty: the service cannot be restored and a
-  // replacement starts from BeginRun at the current frame.
+  // Full state for a replacement process, every ServiceOptions::snapshot_period frames.
+  // Empty: no snapshots; a replacement rebuilds the state by replaying the tick log.
   virtual std::vector<uint8_t> SaveState() const { return {}; }
+  virtual void RestoreState(const std::vector<uint8_t>& /*state*/) {}
   // True if Step never waits for other topics: the runner may then step on the DDS
   // receive thread, saving a thread hand-off per tick. A core that waits for inputs
   // (perception in strict mode) must return false, or it would block their delivery.
@@ -49,7 +50,6 @@ class ServiceCore {
  private:
   friend class ServiceRunner;
   bool replaying_ = false;
-  virtual void RestoreState(const std::vector<uint8_t>& /*state*/) {}
 };
 
 class ServiceRunner {

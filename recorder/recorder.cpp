@@ -16,19 +16,26 @@ Recorder::Recorder(Bus& bus, RecorderOptions options) : options_(std::move(optio
 
 void Recorder::BeginRun(const msg::WorldInfo& world) {
   mode_ = world.settings().perception_mode();
-  const std::string dir = options_.output_dir + "/run" + std::to_string(world.run());
-  std::filesystem::create_directories(dir);
-  // Append when the files exist: a replacement recorder continues the record.
-  const bool resume = std::filesystem::exists(dir + "/frames.csv");
-  air_csv_ = std::ofstream(dir + "/air_state.csv", std::ios::app);
-  frames_csv_ = std::ofstream(dir + "/frames.csv", std::ios::app);
-  if (!air_csv_ || !frames_csv_) throw InputError("recorder: cannot write into " + dir);
+  dir_ = options_.output_dir + "/run" + std::to_string(world.run());
+  std::filesystem::create_directories(dir_);
   hash_ = Fnv1a64().Add(world.run()).Add(world.seed()).value();
-  if (!resume) {
+  opened_ = false;
+}
+
+// A run recorded from its first frame starts fresh files; a replacement recorder that
+// takes over mid-run appends to what the one before it wrote.
+void Recorder::Open(uint64_t first_frame) {
+  const bool fresh = first_frame <= 1;
+  const auto mode = fresh ? std::ios::trunc : std::ios::app;
+  air_csv_ = std::ofstream(dir_ + "/air_state.csv", std::ios::out | mode);
+  frames_csv_ = std::ofstream(dir_ + "/frames.csv", std::ios::out | mode);
+  if (!air_csv_ || !frames_csv_) throw InputError("recorder: cannot write into " + dir_);
+  if (fresh) {
     Line(air_csv_, "frame,sim_time,actor,x,y,z,qw,qx,qy,qz,vx,vy,vz,landed,armed,command_id,command_status");
     Line(frames_csv_, "tick,sim_time,commands,shown_frame,air_state_hash");
   }
-  spdlog::info("recording run {} into {}", world.run(), dir);
+  opened_ = true;
+  spdlog::info("recording run into {} ({})", dir_, fresh ? "new files" : "appending from frame " + std::to_string(first_frame));
 }
 
 void Recorder::Line(std::ofstream& out, const std::string& line) {
@@ -40,6 +47,7 @@ void Recorder::Step(const msg::Tick& tick) {
   // A replacement recorder cannot rebuild past rows (their inputs are gone): it appends
   // from the frame it takes over, and its state hash starts over from there.
   if (replaying()) return;
+  if (!opened_) Open(tick.frame());
   const uint64_t frame = PerceptionFrame(mode_, tick.frame());
   uint64_t air_hash = 0;
   if (options_.air_state && frame >= 1) {

@@ -26,11 +26,14 @@ class Recorder final : public ServiceCore {
 
  private:
   void Line(std::ofstream& out, const std::string& line);
+  void Open(uint64_t first_frame);
   RecorderOptions options_;
   msg::PerceptionMode mode_ = msg::PerceptionMode::PERCEPTION_STRICT;
   FrameBuffer<msg::AirState> air_;
   std::ofstream air_csv_;
   std::ofstream frames_csv_;
+  std::string dir_;      // output folder of the current run
+  bool opened_ = false;  // files are opened at the first live step of a run
   uint64_t hash_ = 0;
 };
 

@@ -202,6 +202,7 @@ struct Coordinator::Impl {
         const auto now = Clock::now();
         CompleteTick(now);
         StartTick(now);
+        PostDone();
         wake = false;
       }
     }
@@ -533,6 +534,15 @@ struct Coordinator::Impl {
     reply_writer.WaitForAcknowledgments(1.0);
   }
 
+  // FrameDone goes out after the next Tick when both are due: the tick is on the
+  // critical path of every service, the FrameDone only of clients.
+  std::optional<msg::FrameDone> done_pending;
+  void PostDone() {
+    if (!done_pending) return;
+    Post(done_writer, *done_pending);
+    done_pending.reset();
+  }
+
   void LogSummary(Clock::time_point now) const {
     if (!first_tick || frame == 0) return;
     const double wall = std::chrono::duration<double>(now - *first_tick).count();
@@ -551,7 +561,7 @@ struct Coordinator::Impl {
     barrier.Close();
     // Keep what a replay cannot infer: the first tick, ticks with commands, dt changes.
     if (log.empty() || !open_tick.commands().empty() || open_tick.dt() != log.back().dt()) log.push_back(open_tick);
-    Post(done_writer, d);
+    done_pending = d;  // posted by PostDone, after the next tick when one follows at once
     const double us = std::chrono::duration<double, std::micro>(now - tick_sent).count();
     barrier_us_sum += us;
     if (barrier_samples.size() < 100000) barrier_samples.push_back(us);
@@ -639,6 +649,7 @@ int Coordinator::Run(const std::atomic<bool>& stop) {
         s.CompleteTick(now);
         if (s.config.ticks > 0 && s.frame >= s.config.ticks && !s.settings.synchronous_mode()) {
           s.SetState(RunState::RUN_STOPPED);
+          s.PostDone();
           s.PublishStatus(now);
           s.Flush(lock);
           s.LogSummary(now);
@@ -690,6 +701,7 @@ int Coordinator::Run(const std::atomic<bool>& stop) {
       }
     }
 
+    s.PostDone();
     if (s.status_dirty || now - s.last_status > std::chrono::milliseconds(500)) s.PublishStatus(now);
     s.Flush(lock);
     if (s.barrier.open() && s.barrier.Complete()) continue;
@@ -698,6 +710,7 @@ int Coordinator::Run(const std::atomic<bool>& stop) {
     });
   }
   s.SetState(RunState::RUN_STOPPED);
+  s.PostDone();
   s.PublishStatus(Clock::now());
   s.Flush(lock);
   s.LogSummary(Clock::now());

@@ -1,6 +1,8 @@
 #include "process.h"
 
 #include <fcntl.h>
+#include <poll.h>
+#include <sys/syscall.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -80,12 +82,21 @@ bool Process::Running() {
 }
 
 std::optional<int> Process::Wait(std::chrono::milliseconds timeout) {
-  // waitpid has no timeout: poll the child's state at a short interval.
+  // waitpid has no timeout; a pidfd becomes readable when the child exits.
   const auto deadline = std::chrono::steady_clock::now() + timeout;
+  const int fd = static_cast<int>(syscall(SYS_pidfd_open, pid_, 0));
   while (Running()) {
-    if (std::chrono::steady_clock::now() >= deadline) return std::nullopt;
-    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(deadline - std::chrono::steady_clock::now());
+    if (left.count() <= 0) break;
+    if (fd >= 0) {
+      pollfd p{fd, POLLIN, 0};
+      poll(&p, 1, static_cast<int>(left.count()));
+    } else {
+      std::this_thread::sleep_for(std::min(left, std::chrono::milliseconds(5)));  // kernels without pidfd
+    }
   }
+  if (fd >= 0) close(fd);
+  if (Running()) return std::nullopt;
   return status_;
 }
 

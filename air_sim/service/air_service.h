@@ -39,7 +39,6 @@ class AirService final : public ServiceCore {
   Writer<msg::AirState> state_writer_;
   Writer<msg::SimEvent> event_writer_;
   FrameBuffer<msg::GroundState> ground_;
-  Reader<msg::MapData> map_reader_;
   std::mutex map_mu_;
   std::condition_variable map_cv_;
   std::optional<msg::MapData> map_;                       // latest map from the coordinator
@@ -51,6 +50,7 @@ class AirService final : public ServiceCore {
   std::map<uint32_t, std::string> blueprints_;
   std::map<uint32_t, std::pair<uint64_t, msg::DroneCommandStatus>> last_command_;  // per drone
   std::vector<msg::SimEvent> pending_events_;
+  Reader<msg::MapData> map_reader_;  // last: its callback uses the members above
 };
 
 // DroneCommand (wire) -> air command body; empty optional with `why` set if it cannot map.

@@ -16,6 +16,11 @@ namespace lockstep {
 
 using Clock = std::chrono::steady_clock;
 
+namespace {
+// Thrown when the runner is told to stop while it waits for the coordinator.
+struct Stopped {};
+}  // namespace
+
 struct ServiceRunner::Impl {
   Impl(Bus& b, ServiceOptions o, ServiceCore& c) : bus(b), options(std::move(o)), core(c) {}
 
@@ -102,7 +107,7 @@ struct ServiceRunner::Impl {
                          std::to_string(options.world_info_timeout_s) + " s (is it running on this DDS domain?)");
       }
     }
-    throw InputError("stopped");
+    throw Stopped{};
   }
 
   // Join: restore from our last snapshot when the run is already under way.
@@ -326,6 +331,8 @@ void ServiceRunner::Run(const std::atomic<bool>& stop) {
       std::lock_guard<std::mutex> step(s.step_mu);
       s.Handle(*tick, stop);
     }
+  } catch (const Stopped&) {
+    // Asked to stop while waiting: a normal end.
   } catch (...) {
     heartbeat_stop = true;
     s.heartbeat_cv.notify_all();

@@ -352,7 +352,11 @@ struct Coordinator::Impl {
   void SetState(RunState next) {
     if (next == state) return;
     if (next == RunState::RUN_FAULTED && !failed_service.empty()) PublishTickLog(failed_service);
-    spdlog::info("run {} frame {}: {} -> {}", run, frame, RunStateName(state), RunStateName(next));
+    // Synchronous mode goes ready -> running -> ready on every tick: keep that quiet.
+    const bool routine = (state == RunState::RUN_READY && next == RunState::RUN_RUNNING) ||
+                         (state == RunState::RUN_RUNNING && next == RunState::RUN_READY);
+    spdlog::log(routine ? spdlog::level::debug : spdlog::level::info, "run {} frame {}: {} -> {}", run, frame,
+                RunStateName(state), RunStateName(next));
     state = next;
     status_dirty = true;
   }

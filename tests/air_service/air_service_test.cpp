@@ -271,3 +271,160 @@ TEST(AirServiceTown, DroneHitsABuildingOfTheMapPublishedOverDds) {
 
 }  // namespace
 }  // namespace lockstep
+
+namespace lockstep {
+namespace {
+
+using namespace std::chrono_literals;
+
+// Stands in for ground_sim: one car driving east at 5 m/s, published every frame.
+class CarOnlyGround final : public ServiceCore {
+ public:
+  explicit CarOnlyGround(Bus& bus) : writer_(bus, topics::kGroundState) {}
+  void BeginRun(const msg::WorldInfo&) override {}
+  void Step(const msg::Tick& tick) override {
+    msg::GroundState g;
+    g.stamp().run(tick.run());
+    g.stamp().frame(tick.frame());
+    g.stamp().sim_time(tick.sim_time());
+    msg::VehicleState v;
+    v.actor(500);
+    v.transform(MakePose(kSpeed * tick.sim_time(), 0, kHalfHeight));
+    v.velocity().x(kSpeed);
+    v.half_extents().x(2.4);
+    v.half_extents().y(1.0);
+    v.half_extents().z(kHalfHeight);
+    g.vehicles({v});
+    g.state_hash(tick.frame());
+    writer_.Write(g);
+  }
+  static constexpr double kSpeed = 5.0;       // m/s
+  static constexpr double kHalfHeight = 0.75; // m: the roof is at 1.5 m
+
+ private:
+  Writer<msg::GroundState> writer_;
+};
+
+// The Jacobi coupling through the wire: air_sim reads the car of frame k-1 from
+// GroundState, and a client that only sees the published states lands a drone on the
+// moving roof, which then carries it.
+TEST(AirServiceGround, ClientLandsADroneOnACarDrivingAtFiveMetresPerSecond) {
+  LaunchConfig c;
+  c.world.synchronous_mode(true);
+  c.world.service_timeout(30);
+  c.services.push_back({"ground_sim", "car_only", "", {}, true, false, "never"});
+  c.services.push_back({"air_sim", "air_sim", "", {}, true, false, "never"});
+  auto bus = CreateInProcessBus();
+  std::mutex mu;
+  std::map<uint64_t, msg::AirState> air;
+  std::map<uint64_t, msg::GroundState> ground;
+  Reader<msg::AirState> ar(*bus, topics::kAirState, [&](const msg::AirState& s, const SampleInfo&) {
+    std::lock_guard<std::mutex> lock(mu);
+    air[s.stamp().frame()] = s;
+  });
+  Reader<msg::GroundState> gr(*bus, topics::kGroundState, [&](const msg::GroundState& s, const SampleInfo&) {
+    std::lock_guard<std::mutex> lock(mu);
+    ground[s.stamp().frame()] = s;
+  });
+  testing::Observer obs(*bus);
+  Coordinator coordinator(*bus, c);
+  CarOnlyGround car(*bus);
+  AirService drones(*bus);
+  ServiceRunner rg(*bus, ServiceOptions{"ground_sim", "car_only", false}, car);
+  ServiceRunner ra(*bus, ServiceOptions{"air_sim", "air_sim", false}, drones);
+  std::atomic<bool> stop{false};
+  std::thread tg([&] { rg.Run(stop); });
+  std::thread ta([&] { ra.Run(stop); });
+  std::thread tc([&] { coordinator.Run(stop); });
+  struct Join {
+    std::atomic<bool>& stop;
+    std::vector<std::thread*> threads;
+    ~Join() {
+      stop = true;
+      for (auto* t : threads) t->join();
+    }
+  } join{stop, {&tg, &ta, &tc}};
+  ASSERT_TRUE(obs.WaitUntil([&] { return obs.status() && obs.status()->state() == msg::RunState::RUN_READY; }, 20s));
+
+  auto send = [&](msg::CommandBody b) {
+    auto r = obs.WaitReply(obs.Send(std::move(b)), 10s);
+    EXPECT_TRUE(r && r->accepted()) << (r ? r->reason().to_string() : "no reply");
+    return r.value_or(msg::CommandReply{});
+  };
+  auto drone = [&](uint32_t actor, msg::DroneCommandKind kind, std::function<void(msg::DroneCommand&)> fill = {}) {
+    msg::DroneCommand d;
+    d.actor(actor);
+    d.kind(kind);
+    d.yaw().is_rate(true);
+    if (fill) fill(d);
+    msg::CommandBody b;
+    b.drone(d);
+    send(b);
+  };
+  auto tick = [&](uint64_t* frame) {
+    msg::TickRequest t;
+    t.count(1);
+    msg::CommandBody b;
+    b.tick_request(t);
+    const uint64_t want = send(b).frame();
+    EXPECT_TRUE(obs.WaitUntil([&] {
+      std::lock_guard<std::mutex> lock(mu);
+      return air.count(want) && ground.count(want);
+    }, 10s));
+    *frame = want;
+  };
+
+  const uint32_t id = send(SpawnBody("drone.generic_quad", MakePose(-10, 4, 0))).actor();
+  drone(id, msg::DroneCommandKind::DRONE_ARM);
+  drone(id, msg::DroneCommandKind::DRONE_TAKEOFF, [](msg::DroneCommand& d) { d.values({3.0}); });
+  uint64_t frame = 0;
+  for (int i = 0; i < 80; ++i) tick(&frame);  // 4 s: up to 3 m
+
+  // Follow the roof using only published states: target = car of this frame plus its
+  // velocity (the service extrapolates it through the tick), first 1.5 m above the roof,
+  // then onto it.
+  bool touched = false;
+  double touchdown_error = 1e9;
+  for (int i = 0; i < 600 && !touched; ++i) {
+    msg::GroundState g;
+    msg::DroneState d;
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      g = ground.at(frame);
+      d = air.at(frame).drones().at(0);
+    }
+    const auto& car_pos = g.vehicles().at(0).transform().position();
+    const double dx = d.transform().position().x() - car_pos.x(), dy = d.transform().position().y() - car_pos.y();
+    const bool above = std::hypot(dx, dy) < 0.25;
+
+    if (d.collision().has_collided() && d.collision().other_kind() == msg::ObjectKind::OBJECT_VEHICLE) {
+      touched = true;
+      touchdown_error = std::hypot(dx, dy);
+      break;
+    }
+    drone(id, msg::DroneCommandKind::DRONE_TRACK_TARGET, [&](msg::DroneCommand& c2) {
+      c2.target().x(car_pos.x());
+      c2.target().y(car_pos.y());
+      c2.target().z(above ? 1.4 : 3.0);  // below the roof top: contact ends the descent
+      c2.values({CarOnlyGround::kSpeed, 0.0, 0.0});
+      c2.velocity(12);  // m/s, max closing speed
+      c2.duration(0.05);
+    });
+    tick(&frame);
+  }
+  ASSERT_TRUE(touched) << "the drone never touched the car";
+  EXPECT_LT(touchdown_error, 0.5) << "touchdown error (m)";
+  std::cout << "touchdown at frame " << frame << ", error " << touchdown_error << " m\n";
+  drone(id, msg::DroneCommandKind::DRONE_LAND);
+  for (int i = 0; i < 60; ++i) tick(&frame);  // 3 s riding
+  std::lock_guard<std::mutex> lock(mu);
+  const auto& d = air.at(frame).drones().at(0);
+  const auto& car_pos = ground.at(frame).vehicles().at(0).transform().position();
+  EXPECT_EQ(d.landed(), msg::LandedState::LANDED_LANDED);
+  EXPECT_NEAR(d.linear_velocity().x(), CarOnlyGround::kSpeed, 0.3) << "carried by the car";
+  EXPECT_NEAR(d.transform().position().x(), car_pos.x(), 1.0) << "still on the roof";
+  EXPECT_GT(d.transform().position().z(), 1.5) << "on top of the roof, not through it";
+}
+
+}  // namespace
+}  // namespace lockstep

@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "lockstep/coordinator/command_processor.h"
+#include "lockstep/coordinator/membership.h"
 #include "lockstep/coordinator/tick_barrier.h"
 #include "lockstep/map/map.h"
 #include "lockstep/map/scene.h"
@@ -31,19 +32,6 @@ constexpr auto kHeartbeatTimeout = std::chrono::milliseconds(600);
 
 namespace {
 
-struct Member {
-  std::string kind;
-  bool required = false;
-  bool ready = false;         // announced READY since it (re)joined
-  bool alive = false;         // ready and heard from within the heartbeat timeout
-  uint64_t stalled_frame = 0; // it missed the service_timeout on this frame; alive again only once it acks it
-  int32_t pid = 0;
-  Clock::time_point last_heard;  // last announcement (heartbeat)
-  uint64_t last_frame = 0;
-  uint64_t last_hash = 0;     // state hash acked with last_frame
-  double last_step_us = 0;
-  std::string failure;        // why it is not alive, if it failed
-};
 
 std::string ReadFile(const std::string& path) {
   std::ifstream in(path);
@@ -113,7 +101,7 @@ struct Coordinator::Impl {
 
   mutable std::mutex mu;
   std::condition_variable cv;
-  std::map<std::string, Member> members;
+  Membership members{config.RequiredServices(), kHeartbeatTimeout};
   std::deque<msg::Command> inbox;
 
   // Run state, touched by the main loop only (under mu).
@@ -181,19 +169,7 @@ struct Coordinator::Impl {
     {
       std::lock_guard<std::mutex> lock(mu);
       const std::string name = a.service().to_string();
-      auto it = members.try_emplace(name).first;
-      Member& m = it->second;
-      if (m.stalled_frame != 0 && a.run() == run && a.frame() >= m.stalled_frame) {
-        m.stalled_frame = 0;  // it caught up: healthy again
-        m.alive = true;
-        m.failure.clear();
-        status_dirty = true;
-      }
-      if (a.run() == run && a.frame() >= m.last_frame) {
-        m.last_frame = a.frame();
-        m.last_hash = a.state_hash();
-        m.last_step_us = a.step_wall_us();
-      }
+      if (members.OnAck(name, run, a)) status_dirty = true;
       wake = barrier.OnAck(name, a.run(), a.frame(), a.state_hash()) == TickBarrier::AckResult::kCounted &&
              barrier.Complete();
       if (wake && CanChainTick()) {
@@ -224,32 +200,7 @@ struct Coordinator::Impl {
   void OnAnnounce(const msg::ServiceAnnounce& a) {
     {
       std::lock_guard<std::mutex> lock(mu);
-      Member& m = members[a.service().to_string()];
-      m.kind = a.kind().to_string();
-      m.last_heard = Clock::now();
-      if (m.stalled_frame != 0 && m.pid != a.pid()) m.stalled_frame = 0;  // a replacement process
-      if (a.state() == msg::ServiceState::SERVICE_READY && m.stalled_frame != 0) {
-        // Heartbeats alone do not clear a stall: the service must finish the frame.
-      } else if (a.state() == msg::ServiceState::SERVICE_READY) {
-        if (!m.alive) status_dirty = true;
-        if (!m.alive) spdlog::info("service '{}' ({}, pid {} on {}) joined at frame {}", a.service().to_string(),
-                                   a.kind().to_string(), a.pid(), a.host().to_string(), a.last_frame());
-        m.ready = true;
-        m.alive = true;
-        m.failure.clear();
-      } else if (a.state() == msg::ServiceState::SERVICE_STOPPING) {
-        if (m.alive) {
-          m.failure = "stopped (announced shutdown)";
-          spdlog::warn("service '{}' {}", a.service().to_string(), m.failure);
-        }
-        m.ready = false;
-        m.alive = false;
-      } else {
-        m.ready = false;
-        m.alive = false;
-      }
-      if (m.pid != a.pid()) status_dirty = true;
-      m.pid = a.pid();
+      if (members.OnAnnounce(a, Clock::now())) status_dirty = true;
     }
     cv.notify_one();
   }
@@ -315,7 +266,7 @@ struct Coordinator::Impl {
     s.tick_rate_hz(rate);
     s.real_time_factor(rate * settings.fixed_delta_seconds());
     std::vector<msg::MemberStatus> list;
-    for (const auto& [name, m] : members) {
+    for (const auto& [name, m] : members.members()) {
       msg::MemberStatus ms;
       ms.service(name);
       ms.kind(m.kind);
@@ -338,10 +289,9 @@ struct Coordinator::Impl {
     msg::TickLog l;
     l.run(run);
     l.service(service);
-    auto it = members.find(service);
-    if (it != members.end()) {
-      l.last_frame(it->second.last_frame);
-      l.last_hash(it->second.last_hash);
+    if (const Member* m = members.Find(service)) {
+      l.last_frame(m->last_frame);
+      l.last_hash(m->last_hash);
     }
     l.frames(frame);
     l.ticks(log);
@@ -452,33 +402,6 @@ struct Coordinator::Impl {
     }
   }
 
-  // Marks silent members dead: a killed or stopped process stops its heartbeats.
-  void CheckHeartbeats(Clock::time_point now) {
-    for (auto& [name, m] : members) {
-      if (m.alive && now - m.last_heard > kHeartbeatTimeout) {
-        m.alive = false;
-        m.ready = false;
-        m.failure = "sent no heartbeat for " + std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(now - m.last_heard).count()) +
-                    " ms (crashed, hung or stopped; pid " + std::to_string(m.pid) + ")";
-        spdlog::error("service '{}' {}", name, m.failure);
-        status_dirty = true;
-      }
-    }
-  }
-
-  // Required services that are not alive, with reasons; empty if all are.
-  std::string CheckMembers(std::string* failed) {
-    for (const auto& name : config.RequiredServices()) {
-      auto it = members.find(name);
-      if (it == members.end() || !it->second.alive) {
-        *failed = name;
-        if (it == members.end()) return "has not joined";
-        return it->second.failure.empty() ? "has not announced ready" : it->second.failure;
-      }
-    }
-    return {};
-  }
-
   void StartTick(Clock::time_point now) {
     if (!first_tick) first_tick = now;
     msg::Tick t;
@@ -581,7 +504,6 @@ Coordinator::Coordinator(Bus& bus, LaunchConfig config) : impl_(std::make_unique
   s.seed = s.config.seed;
   s.settings = s.config.world;
   s.weather = DefaultWeather();
-  for (const auto& name : s.config.RequiredServices()) s.members[name].required = true;
   if (!s.config.map.empty()) s.UseMap(ReadMap(s.config.map));
   s.RegisterMapActors();
   s.tick_writer = Writer<msg::Tick>(bus, topics::kTick);
@@ -626,10 +548,10 @@ int Coordinator::Run(const std::atomic<bool>& stop) {
   while (!stop) {
     const auto now = Clock::now();
     s.HandleCommands();
-    s.CheckHeartbeats(now);
+    if (s.members.CheckHeartbeats(now)) s.status_dirty = true;
 
     std::string failed;
-    const std::string why = s.CheckMembers(&failed);
+    const std::string why = s.members.FirstMissing(&failed);
     if (!why.empty()) {
       if (s.state == RunState::RUN_RUNNING || s.state == RunState::RUN_READY ||
           (s.state == RunState::RUN_FAULTED && failed != s.failed_service)) {
@@ -667,12 +589,7 @@ int Coordinator::Run(const std::atomic<bool>& stop) {
         s.failed_service = s.barrier.Missing().front();
         s.failure_reason = "service '" + s.failed_service + "' did not acknowledge frame " + std::to_string(s.barrier.frame()) +
                            " within " + std::to_string(s.settings.service_timeout()) + " s (missing: " + missing + ")";
-        auto it = s.members.find(s.failed_service);
-        if (it != s.members.end()) {
-          it->second.alive = false;
-          it->second.stalled_frame = s.barrier.frame();
-          it->second.failure = "timed out on frame " + std::to_string(s.barrier.frame());
-        }
+        s.members.MarkStalled(s.failed_service, s.barrier.frame());
         spdlog::error("stopping the clock: {}", s.failure_reason);
         s.SetState(RunState::RUN_FAULTED);
         s.Flush(lock);

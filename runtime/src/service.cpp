@@ -103,7 +103,7 @@ struct ServiceRunner::Impl {
       if (cv.wait_until(lock, std::min<Clock::time_point>(deadline, Clock::now() + std::chrono::milliseconds(100))) ==
               std::cv_status::timeout &&
           Clock::now() >= deadline) {
-        throw InputError("service '" + options.name + "': no world info from a coordinator within " +
+        throw JoinTimeout("service '" + options.name + "': no world info from a coordinator within " +
                          std::to_string(options.world_info_timeout_s) + " s (is it running on this DDS domain?)");
       }
     }

@@ -36,16 +36,32 @@ int RunServiceMain(int argc, char** argv, const std::string& kind, bool percepti
     for (const auto& s : ctx.config.services) {
       if (s.name == name) ctx.self = &s;
     }
-    auto bus = CreateDdsBus({ctx.config.domain_id, ctx.config.qos_file, ctx.config.participant_profile, name});
-    ctx.bus = bus.get();
-    std::unique_ptr<ServiceCore> core = make_core(ctx);
-    {
-      ServiceRunner runner(*bus, ServiceOptions{name, kind, perception}, *core);
-      runner.Run(g_stop);
-      spdlog::info("stopping after frame {}", runner.last_frame());
+    // Fast DDS 2.9's shared-memory transport can leave the port of a process killed with
+    // SIGKILL unusable, and a replacement that reopens it hears nothing (Fast DDS issue
+    // 5469). If no coordinator is heard within 10 s, join again with a new participant
+    // while the old one still holds that port, so the new one gets another.
+    std::vector<std::unique_ptr<Bus>> stale;
+    constexpr int kAttempts = 3;
+    for (int attempt = 1;; ++attempt) {
+      auto bus = CreateDdsBus({ctx.config.domain_id, ctx.config.qos_file, ctx.config.participant_profile, name});
+      ctx.bus = bus.get();
+      std::unique_ptr<ServiceCore> core = make_core(ctx);
+      try {
+        ServiceOptions options{name, kind, perception};
+        options.world_info_timeout_s = 10;
+        ServiceRunner runner(*bus, options, *core);
+        runner.Run(g_stop);
+        spdlog::info("stopping after frame {}", runner.last_frame());
+      } catch (const JoinTimeout& e) {
+        if (attempt == kAttempts) throw;
+        spdlog::warn("{}; joining again with a new participant ({} of {})", e.what(), attempt + 1, kAttempts);
+        core.reset();
+        stale.push_back(std::move(bus));
+        continue;
+      }
+      core.reset();
+      return 0;
     }
-    core.reset();
-    return 0;
   } catch (const std::exception& e) {
     spdlog::error("{}", e.what());
     return 2;

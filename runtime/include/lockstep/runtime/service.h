@@ -9,9 +9,16 @@
 #include <vector>
 
 #include "lockstep/runtime/bus.h"
+#include "lockstep/runtime/error.h"
 #include "lockstep/runtime/messages.h"
 
 namespace lockstep {
+
+// No world info from a coordinator within ServiceOptions::world_info_timeout_s.
+class JoinTimeout : public InputError {
+ public:
+  using InputError::InputError;
+};
 
 struct ServiceOptions {
   std::string name;                  // unique in a run, e.g. "air_sim"

@@ -1,0 +1,53 @@
+#pragma once
+// Who is in the run and who is alive, as plain logic: the coordinator feeds it
+// announcements (heartbeats, every 100 ms) and acks, and asks it which required
+// service, if any, is missing and why. No DDS inside; the clock is passed in.
+#include <chrono>
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "lockstep/msg/clock.h"
+
+namespace lockstep {
+
+struct Member {
+  std::string kind;
+  bool required = false;
+  bool ready = false;          // announced READY since it (re)joined
+  bool alive = false;          // ready and heard from within the heartbeat timeout
+  uint64_t stalled_frame = 0;  // missed the per-tick timeout on this frame: alive again only once it acks it
+  int32_t pid = 0;
+  std::chrono::steady_clock::time_point last_heard;  // last announcement
+  uint64_t last_frame = 0;     // last frame acked in the current run
+  uint64_t last_hash = 0;      // state hash acked with last_frame
+  double last_step_us = 0;     // wall time of its last step
+  std::string failure;         // why it is not alive, if it failed
+};
+
+class Membership {
+ public:
+  using Clock = std::chrono::steady_clock;
+  Membership(const std::vector<std::string>& required, Clock::duration heartbeat_timeout);
+
+  // Each returns true when something a status report shows has changed.
+  bool OnAnnounce(const msg::ServiceAnnounce& a, Clock::time_point now);
+  bool OnAck(const std::string& service, uint32_t current_run, const msg::Ack& a);
+  // Marks members silent for longer than the timeout as dead (crashed or stopped).
+  bool CheckHeartbeats(Clock::time_point now);
+  // A member that did not finish `frame` in time; it stays dead until it acks it.
+  void MarkStalled(const std::string& service, uint64_t frame);
+
+  // The first required service that is not alive, and why; empty reason if all are.
+  std::string FirstMissing(std::string* service) const;
+  const Member* Find(const std::string& service) const;
+  const std::map<std::string, Member>& members() const { return members_; }
+
+ private:
+  std::vector<std::string> required_;
+  Clock::duration heartbeat_timeout_;
+  std::map<std::string, Member> members_;  // ordered by name
+};
+
+}  // namespace lockstep

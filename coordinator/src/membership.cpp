@@ -1,0 +1,99 @@
+#include "lockstep/coordinator/membership.h"
+
+#include "lockstep/runtime/log.h"
+
+namespace lockstep {
+
+Membership::Membership(const std::vector<std::string>& required, Clock::duration heartbeat_timeout)
+    : required_(required), heartbeat_timeout_(heartbeat_timeout) {
+  for (const auto& name : required_) members_[name].required = true;
+}
+
+bool Membership::OnAnnounce(const msg::ServiceAnnounce& a, Clock::time_point now) {
+  const std::string name = a.service().to_string();
+  Member& m = members_[name];
+  bool changed = false;
+  m.kind = a.kind().to_string();
+  m.last_heard = now;
+  if (m.stalled_frame != 0 && m.pid != a.pid()) m.stalled_frame = 0;  // a replacement process
+  if (a.state() == msg::ServiceState::SERVICE_READY && m.stalled_frame != 0) {
+    // Heartbeats alone do not clear a stall: the service must finish the frame.
+  } else if (a.state() == msg::ServiceState::SERVICE_READY) {
+    if (!m.alive) {
+      changed = true;
+      spdlog::info("service '{}' ({}, pid {} on {}) joined at frame {}", name, m.kind, a.pid(), a.host().to_string(), a.last_frame());
+    }
+    m.ready = true;
+    m.alive = true;
+    m.failure.clear();
+  } else {
+    if (a.state() == msg::ServiceState::SERVICE_STOPPING && m.alive) {
+      m.failure = "stopped (announced shutdown)";
+      spdlog::warn("service '{}' {}", name, m.failure);
+    }
+    changed = changed || m.alive;
+    m.ready = false;
+    m.alive = false;
+  }
+  if (m.pid != a.pid()) changed = true;
+  m.pid = a.pid();
+  return changed;
+}
+
+bool Membership::OnAck(const std::string& service, uint32_t current_run, const msg::Ack& a) {
+  Member& m = members_[service];
+  bool changed = false;
+  if (m.stalled_frame != 0 && a.run() == current_run && a.frame() >= m.stalled_frame) {
+    m.stalled_frame = 0;  // it caught up: healthy again
+    m.alive = true;
+    m.failure.clear();
+    changed = true;
+  }
+  if (a.run() == current_run && a.frame() >= m.last_frame) {
+    m.last_frame = a.frame();
+    m.last_hash = a.state_hash();
+    m.last_step_us = a.step_wall_us();
+  }
+  return changed;
+}
+
+bool Membership::CheckHeartbeats(Clock::time_point now) {
+  bool changed = false;
+  for (auto& [name, m] : members_) {
+    if (!m.alive || now - m.last_heard <= heartbeat_timeout_) continue;
+    m.alive = false;
+    m.ready = false;
+    m.failure = "sent no heartbeat for " +
+                std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(now - m.last_heard).count()) +
+                " ms (crashed, hung or stopped; pid " + std::to_string(m.pid) + ")";
+    spdlog::error("service '{}' {}", name, m.failure);
+    changed = true;
+  }
+  return changed;
+}
+
+void Membership::MarkStalled(const std::string& service, uint64_t frame) {
+  auto it = members_.find(service);
+  if (it == members_.end()) return;
+  it->second.alive = false;
+  it->second.stalled_frame = frame;
+  it->second.failure = "timed out on frame " + std::to_string(frame);
+}
+
+std::string Membership::FirstMissing(std::string* service) const {
+  for (const auto& name : required_) {
+    auto it = members_.find(name);
+    if (it != members_.end() && it->second.alive) continue;
+    *service = name;
+    if (it == members_.end()) return "has not joined";
+    return it->second.failure.empty() ? "has not announced ready" : it->second.failure;
+  }
+  return {};
+}
+
+const Member* Membership::Find(const std::string& service) const {
+  auto it = members_.find(service);
+  return it == members_.end() ? nullptr : &it->second;
+}
+
+}  // namespace lockstep

@@ -1,0 +1,103 @@
+#include "lockstep/coordinator/membership.h"
+
+#include <gtest/gtest.h>
+
+namespace lockstep {
+namespace {
+
+using namespace std::chrono_literals;
+using Clock = Membership::Clock;
+
+msg::ServiceAnnounce Announce(const std::string& name, msg::ServiceState state, int32_t pid) {
+  msg::ServiceAnnounce a;
+  a.service(name);
+  a.kind("noop");
+  a.state(state);
+  a.pid(pid);
+  return a;
+}
+
+msg::Ack AckOf(uint32_t run, uint64_t frame, uint64_t hash = 0) {
+  msg::Ack a;
+  a.run(run);
+  a.frame(frame);
+  a.state_hash(hash);
+  return a;
+}
+
+TEST(Membership, RequiredServicesMustJoinAndAnnounceReady) {
+  Membership m({"air", "ground"}, 600ms);
+  const auto t0 = Clock::now();
+  std::string who;
+  EXPECT_EQ(m.FirstMissing(&who), "has not announced ready");
+  EXPECT_EQ(who, "air");
+  EXPECT_TRUE(m.OnAnnounce(Announce("air", msg::ServiceState::SERVICE_STARTING, 10), t0));
+  EXPECT_FALSE(m.FirstMissing(&who).empty());
+  EXPECT_TRUE(m.OnAnnounce(Announce("air", msg::ServiceState::SERVICE_READY, 10), t0));
+  EXPECT_TRUE(m.OnAnnounce(Announce("ground", msg::ServiceState::SERVICE_READY, 11), t0));
+  EXPECT_EQ(m.FirstMissing(&who), "");
+  EXPECT_FALSE(m.OnAnnounce(Announce("air", msg::ServiceState::SERVICE_READY, 10), t0 + 100ms)) << "a heartbeat changes nothing";
+}
+
+TEST(Membership, SilenceLongerThanTheTimeoutIsAFailure) {
+  Membership m({"air"}, 600ms);
+  const auto t0 = Clock::now();
+  m.OnAnnounce(Announce("air", msg::ServiceState::SERVICE_READY, 10), t0);
+  EXPECT_FALSE(m.CheckHeartbeats(t0 + 600ms)) << "exactly the timeout is still alive";
+  EXPECT_TRUE(m.CheckHeartbeats(t0 + 601ms));
+  std::string who;
+  const std::string why = m.FirstMissing(&who);
+  EXPECT_EQ(who, "air");
+  EXPECT_NE(why.find("sent no heartbeat for 601 ms"), std::string::npos) << why;
+  EXPECT_NE(why.find("pid 10"), std::string::npos) << why;
+  // A replacement joins.
+  EXPECT_TRUE(m.OnAnnounce(Announce("air", msg::ServiceState::SERVICE_READY, 20), t0 + 2s));
+  EXPECT_EQ(m.FirstMissing(&who), "");
+}
+
+TEST(Membership, AStalledServiceNeedsToFinishTheFrameNotJustHeartbeat) {
+  Membership m({"render"}, 600ms);
+  const auto t0 = Clock::now();
+  m.OnAnnounce(Announce("render", msg::ServiceState::SERVICE_READY, 7), t0);
+  m.MarkStalled("render", 42);
+  std::string who;
+  EXPECT_EQ(m.FirstMissing(&who), "timed out on frame 42");
+  m.OnAnnounce(Announce("render", msg::ServiceState::SERVICE_READY, 7), t0 + 100ms);
+  EXPECT_FALSE(m.FirstMissing(&who).empty()) << "heartbeats alone do not revive it";
+  EXPECT_FALSE(m.OnAck("render", 1, AckOf(1, 41)));
+  EXPECT_FALSE(m.FirstMissing(&who).empty()) << "an older frame does not either";
+  EXPECT_TRUE(m.OnAck("render", 1, AckOf(1, 42)));
+  EXPECT_EQ(m.FirstMissing(&who), "");
+}
+
+TEST(Membership, AReplacementProcessClearsAStall) {
+  Membership m({"render"}, 600ms);
+  const auto t0 = Clock::now();
+  m.OnAnnounce(Announce("render", msg::ServiceState::SERVICE_READY, 7), t0);
+  m.MarkStalled("render", 42);
+  m.OnAnnounce(Announce("render", msg::ServiceState::SERVICE_READY, 8), t0 + 1s);
+  std::string who;
+  EXPECT_EQ(m.FirstMissing(&who), "");
+}
+
+TEST(Membership, AcksOfTheCurrentRunTrackTheLastFrameAndHash) {
+  Membership m({"air"}, 600ms);
+  m.OnAck("air", 2, AckOf(2, 5, 0xabc));
+  m.OnAck("air", 2, AckOf(1, 900, 0xdead));  // an older run
+  m.OnAck("air", 2, AckOf(2, 4, 0x111));     // a re-ack of an older frame
+  ASSERT_NE(m.Find("air"), nullptr);
+  EXPECT_EQ(m.Find("air")->last_frame, 5u);
+  EXPECT_EQ(m.Find("air")->last_hash, 0xabcu);
+}
+
+TEST(Membership, AnAnnouncedShutdownIsAFailureWithItsReason) {
+  Membership m({"air"}, 600ms);
+  const auto t0 = Clock::now();
+  m.OnAnnounce(Announce("air", msg::ServiceState::SERVICE_READY, 10), t0);
+  EXPECT_TRUE(m.OnAnnounce(Announce("air", msg::ServiceState::SERVICE_STOPPING, 10), t0));
+  std::string who;
+  EXPECT_EQ(m.FirstMissing(&who), "stopped (announced shutdown)");
+}
+
+}  // namespace
+}  // namespace lockstep

@@ -101,7 +101,8 @@ struct Coordinator::Impl {
 
   mutable std::mutex mu;
   std::condition_variable cv;
-  Membership members{config.RequiredServices(), kHeartbeatTimeout};
+  const std::vector<std::string> required_services = config.RequiredServices();
+  Membership members{required_services, kHeartbeatTimeout};
   std::deque<msg::Command> inbox;
 
   // Run state, touched by the main loop only (under mu).
@@ -415,7 +416,7 @@ struct Coordinator::Impl {
     batch.insert(batch.end(), client.begin(), client.end());
     t.commands(std::move(batch));
     open_tick = t;
-    barrier.Open(run, t.frame(), config.RequiredServices());
+    barrier.Open(run, t.frame(), required_services);
     tick_sent = now;
     tick_deadline = now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(settings.service_timeout()));
     Post(tick_writer, open_tick);
@@ -448,7 +449,7 @@ struct Coordinator::Impl {
 
   void ResendTick(Clock::time_point now) {
     // Same frame, same commands: services that already did it ack again.
-    barrier.Open(run, open_tick.frame(), config.RequiredServices());
+    barrier.Open(run, open_tick.frame(), required_services);
     tick_sent = now;
     tick_deadline = now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(settings.service_timeout()));
     Post(tick_writer, open_tick);

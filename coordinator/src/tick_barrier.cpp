@@ -8,8 +8,15 @@ void TickBarrier::Open(uint32_t run, uint64_t frame, const std::vector<std::stri
   open_ = true;
   run_ = run;
   frame_ = frame;
-  entries_.clear();
-  for (const auto& name : required) entries_[name] = Entry{};
+  // Every tick opens the barrier for the same services: reset in place, no allocation.
+  bool same = entries_.size() == required.size();
+  for (size_t i = 0; same && i < required.size(); ++i) same = entries_.count(required[i]) > 0;
+  if (same) {
+    for (auto& [name, e] : entries_) e = Entry{};
+  } else {
+    entries_.clear();
+    for (const auto& name : required) entries_[name] = Entry{};
+  }
   pending_ = entries_.size();
 }
 

@@ -62,6 +62,18 @@ msg::ObjectKind ToWire(air::ObjectKind k) {
 }
 bool IsDroneBlueprint(const std::string& bp) { return bp.rfind("drone.", 0) == 0; }
 
+// The fields move-to-position and move-on-path share.
+template <class Move>
+Move PathMove(const msg::DroneCommand& d) {
+  Move m;
+  m.velocity = d.velocity();
+  m.timeout = Timeout(d.timeout());
+  m.drivetrain = Drive(d.drivetrain());
+  m.yaw_mode = Yaw(d.yaw());
+  m.lookahead = d.lookahead() > 0 ? d.lookahead() : -1;
+  return m;
+}
+
 }  // namespace
 
 std::optional<air::CommandBody> ToAirCommand(const msg::DroneCommand& d, std::string* why) {
@@ -81,23 +93,13 @@ std::optional<air::CommandBody> ToAirCommand(const msg::DroneCommand& d, std::st
     case K::DRONE_CANCEL: return air::cmd::Hover{};
     case K::DRONE_GO_HOME: return air::cmd::GoHome{d.velocity(), Timeout(d.timeout())};
     case K::DRONE_MOVE_TO_POSITION: {
-      air::cmd::MoveToPosition m;
+      auto m = PathMove<air::cmd::MoveToPosition>(d);
       m.position = ToVec(d.target());
-      m.velocity = d.velocity();
-      m.timeout = Timeout(d.timeout());
-      m.drivetrain = Drive(d.drivetrain());
-      m.yaw_mode = Yaw(d.yaw());
-      m.lookahead = d.lookahead() > 0 ? d.lookahead() : -1;
       return m;
     }
     case K::DRONE_MOVE_ON_PATH: {
-      air::cmd::MoveOnPath m;
+      auto m = PathMove<air::cmd::MoveOnPath>(d);
       for (const auto& p : d.path()) m.path.push_back(ToVec(p));
-      m.velocity = d.velocity();
-      m.timeout = Timeout(d.timeout());
-      m.drivetrain = Drive(d.drivetrain());
-      m.yaw_mode = Yaw(d.yaw());
-      m.lookahead = d.lookahead() > 0 ? d.lookahead() : -1;
       return m;
     }
     case K::DRONE_TRACK_TARGET: {

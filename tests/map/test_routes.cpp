@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include "carla_towns.h"
+
 #include <cmath>
 #include <map>
 #include <numbers>
@@ -9,15 +11,6 @@
 
 namespace lockstep::map {
 namespace {
-
-const std::string kDir = LOCKSTEP_CARLA_MAPS_DIR;
-
-const Map& Town(const std::string& name) {
-  static std::map<std::string, Map> cache;
-  auto it = cache.find(name);
-  if (it == cache.end()) it = cache.emplace(name, Map::Load(kDir + "/" + name + ".xodr")).first;
-  return it->second;
-}
 
 class map_routes : public ::testing::TestWithParam<std::string> {};
 

@@ -167,6 +167,7 @@ struct Coordinator::Impl {
   // --- callbacks (middleware threads) ---
   void OnAck(const msg::Ack& a) {
     bool wake = false;
+    bool chained = false;
     {
       std::lock_guard<std::mutex> lock(mu);
       const std::string name = a.service().to_string();
@@ -181,10 +182,11 @@ struct Coordinator::Impl {
         StartTick(now);
         PostDone();
         wake = false;
+        chained = true;
       }
     }
     if (wake) cv.notify_one();
-    FlushFromCallback();
+    if (chained) FlushFromCallback();
   }
 
   // The main loop's decisions would be "complete this tick, start the next one".
@@ -416,7 +418,13 @@ struct Coordinator::Impl {
     batch.insert(batch.end(), client.begin(), client.end());
     t.commands(std::move(batch));
     open_tick = t;
-    barrier.Open(run, t.frame(), required_services);
+    SendOpenTick(now);
+  }
+
+  // Opens the barrier for open_tick and sends it. A re-send after a fault has the same
+  // frame and commands: services that already did it ack again.
+  void SendOpenTick(Clock::time_point now) {
+    barrier.Open(run, open_tick.frame(), required_services);
     tick_sent = now;
     tick_deadline = now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(settings.service_timeout()));
     Post(tick_writer, open_tick);
@@ -445,14 +453,6 @@ struct Coordinator::Impl {
       if (!step.alias.empty()) aliases[step.alias] = r.actor();
     }
     return commands.TakePending();
-  }
-
-  void ResendTick(Clock::time_point now) {
-    // Same frame, same commands: services that already did it ack again.
-    barrier.Open(run, open_tick.frame(), required_services);
-    tick_sent = now;
-    tick_deadline = now + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(settings.service_timeout()));
-    Post(tick_writer, open_tick);
   }
 
   // Before the process goes: the last FrameDone and RunStatus must reach their readers.
@@ -566,7 +566,7 @@ int Coordinator::Run(const std::atomic<bool>& stop) {
       s.failed_service.clear();
       s.failure_reason.clear();
       s.SetState(s.settings.synchronous_mode() ? RunState::RUN_READY : RunState::RUN_RUNNING);
-      if (s.barrier.open()) s.ResendTick(now);
+      if (s.barrier.open()) s.SendOpenTick(now);
     }
 
     const bool active = s.state == RunState::RUN_RUNNING || s.state == RunState::RUN_READY;

@@ -27,6 +27,11 @@ struct ServiceRunner::Impl {
   Bus& bus;
   ServiceOptions options;
   ServiceCore& core;
+  const std::string host = [] {
+    char h[64] = {};
+    gethostname(h, sizeof h - 1);
+    return std::string(h);
+  }();
 
   std::mutex mu;
   std::mutex step_mu;                    // one step at a time, whichever thread runs it
@@ -60,8 +65,6 @@ struct ServiceRunner::Impl {
     a.perception(options.perception);
     a.state(state);
     a.pid(static_cast<int32_t>(getpid()));
-    char host[64] = {};
-    gethostname(host, sizeof host - 1);
     a.host(host);
     a.last_frame(last_frame);
     announce.Write(a);

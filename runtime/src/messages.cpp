@@ -2,6 +2,7 @@
 // PubSubTypes (and through them Fast DDS headers).
 #include "lockstep/runtime/messages.h"
 
+#include "lockstep/msg/blueprintPubSubTypes.h"
 #include "lockstep/msg/clockPubSubTypes.h"
 #include "lockstep/msg/commandPubSubTypes.h"
 #include "lockstep/msg/mapPubSubTypes.h"

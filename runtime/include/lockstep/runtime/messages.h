@@ -1,5 +1,6 @@
 #pragma once
 // Every topic of the system: name, type and QoS family. docs/topics.md mirrors this list.
+#include "lockstep/msg/blueprint.h"
 #include "lockstep/msg/clock.h"
 #include "lockstep/msg/command.h"
 #include "lockstep/msg/common.h"
@@ -11,6 +12,7 @@
 
 #define LOCKSTEP_MESSAGE_TYPES(X)                                                        \
   X(Tick) X(TickLog) X(Ack) X(ServiceAnnounce) X(ServiceSnapshot) X(RunStatus) X(FrameDone)         \
+  X(BlueprintSet)                                                                       \
   X(WorldInfo) X(MapData) X(Command) X(CommandReply) X(GroundState) X(AirState)          \
   X(SimEvent) X(Image) X(PointCloud) X(RadarScan) X(Imu) X(Gnss) X(Barometer)            \
   X(Magnetometer) X(CollisionEvent) X(LaneInvasionEvent) X(ObstacleDetection)
@@ -30,6 +32,8 @@ inline constexpr Topic<msg::TickLog> kTickLog{"lockstep/tick_log", QosKind::kClo
 inline constexpr Topic<msg::Ack> kAck{"lockstep/ack", QosKind::kAck};
 inline constexpr Topic<msg::ServiceAnnounce> kService{"lockstep/service", QosKind::kMembership};
 inline constexpr Topic<msg::ServiceSnapshot> kSnapshot{"lockstep/snapshot", QosKind::kMembership};
+// What each service simulates (blueprint.idl); the library is their union.
+inline constexpr Topic<msg::BlueprintSet> kBlueprints{"lockstep/blueprints", QosKind::kMembership};
 inline constexpr Topic<msg::RunStatus> kRunStatus{"lockstep/run_status", QosKind::kClock};
 inline constexpr Topic<msg::FrameDone> kFrameDone{"lockstep/frame_done", QosKind::kClock};
 inline constexpr Topic<msg::WorldInfo> kWorldInfo{"lockstep/world_info", QosKind::kClock};

@@ -39,6 +39,10 @@ class ServiceCore {
   // Apply tick.commands() in order, advance the state to tick.frame(), publish outputs
   // stamped with it.
   virtual void Step(const msg::Tick& tick) = 0;
+  // The blueprints this service simulates (blueprint.idl), published on
+  // lockstep/blueprints when it joins. Spawns of these arrive in ticks with
+  // SpawnActor.owner naming the service that must simulate the actor.
+  virtual std::vector<msg::BlueprintDeclaration> Blueprints() const { return {}; }
   // FNV-1a of the state after the last step (0: the service keeps no state).
   virtual uint64_t StateHash() const { return 0; }
   // Full state for a replacement process, every ServiceOptions::snapshot_period frames.

@@ -43,6 +43,10 @@ class ServiceCore {
   // lockstep/blueprints when it joins. Spawns of these arrive in ticks with
   // SpawnActor.owner naming the service that must simulate the actor.
   virtual std::vector<msg::BlueprintDeclaration> Blueprints() const { return {}; }
+  // Checks what a declaration cannot express (a parameter combination) for a spawn of one
+  // of this service's blueprints: empty = it can be simulated, else the reason. The
+  // coordinator asks the owner before it replies to the client (docs/topics.md).
+  virtual std::string CheckSpawn(const msg::SpawnActor& /*spawn*/) const { return {}; }
   // FNV-1a of the state after the last step (0: the service keeps no state).
   virtual uint64_t StateHash() const { return 0; }
   // Full state for a replacement process, every ServiceOptions::snapshot_period frames.

@@ -15,7 +15,7 @@
   X(BlueprintSet)                                                                       \
   X(WorldInfo) X(MapData) X(Command) X(CommandReply) X(GroundState) X(AirState)          \
   X(SimEvent) X(Image) X(PointCloud) X(RadarScan) X(Imu) X(Gnss) X(Barometer)            \
-  X(Magnetometer) X(CollisionEvent) X(LaneInvasionEvent) X(ObstacleDetection)
+  X(Magnetometer) X(CollisionEvent) X(LaneInvasionEvent) X(ObstacleDetection) X(PhysicsEvents)
 
 namespace lockstep {
 
@@ -45,6 +45,7 @@ inline constexpr Topic<msg::CommandReply> kCommandReply{"lockstep/command_reply"
 inline constexpr Topic<msg::GroundState> kGroundState{"lockstep/ground_state", QosKind::kState};
 inline constexpr Topic<msg::AirState> kAirState{"lockstep/air_state", QosKind::kState};
 inline constexpr Topic<msg::SimEvent> kEvent{"lockstep/event", QosKind::kEvent};
+inline constexpr Topic<msg::PhysicsEvents> kPhysicsEvents{"lockstep/physics_events", QosKind::kState};
 // Sensors.
 inline constexpr Topic<msg::Image> kImage{"lockstep/sensor/image", QosKind::kSensor};
 inline constexpr Topic<msg::PointCloud> kPointCloud{"lockstep/sensor/point_cloud", QosKind::kSensor};

@@ -18,7 +18,8 @@ enum class QosKind {
   kCommand,     // RELIABLE, KEEP_LAST 256, VOLATILE: commands and replies
   kState,       // RELIABLE, KEEP_LAST 4, TRANSIENT_LOCAL: ground / air state
   kEvent,       // RELIABLE, KEEP_LAST 64, VOLATILE
-  kSensor,      // RELIABLE, KEEP_LAST 2, VOLATILE: images, point clouds
+  kSensor,      // RELIABLE, KEEP_LAST 2, VOLATILE: point clouds, IMU, ...
+  kImage,       // as kSensor, preallocated history and data-sharing: camera images
 };
 const char* QosFamilyName(QosKind kind);
 int QosHistoryDepth(QosKind kind);

@@ -16,6 +16,8 @@ bool Membership::OnAnnounce(const msg::ServiceAnnounce& a, Clock::time_point now
   m.kind = a.kind().to_string();
   m.last_heard = now;
   m.blueprints = a.blueprints();
+  m.host = a.host().to_string();
+  m.announced_frame = a.last_frame();
   m.ready_announced = a.state() == msg::ServiceState::SERVICE_READY;
   if (m.stalled_frame != 0 && m.pid != a.pid()) m.stalled_frame = 0;  // a replacement process
   if (a.state() == msg::ServiceState::SERVICE_READY && m.stalled_frame != 0) {
@@ -28,7 +30,8 @@ bool Membership::OnAnnounce(const msg::ServiceAnnounce& a, Clock::time_point now
   } else if (a.state() == msg::ServiceState::SERVICE_READY) {
     if (!m.alive) {
       changed = true;
-      spdlog::info("service '{}' ({}, pid {} on {}) joined at frame {}", name, m.kind, a.pid(), a.host().to_string(), a.last_frame());
+      spdlog::info("service '{}' ({}, pid {} on {}) joined at frame {} with {} blueprint(s)", name, m.kind, a.pid(),
+                   a.host().to_string(), a.last_frame(), m.blueprints);
     }
     m.ready = true;
     m.alive = true;
@@ -71,7 +74,8 @@ bool Membership::OnBlueprints(const std::string& service, long count) {
     m.ready = true;
     m.alive = true;
     m.failure.clear();
-    spdlog::info("service '{}' joined with {} blueprint(s)", service, count);
+    spdlog::info("service '{}' ({}, pid {} on {}) joined at frame {} with {} blueprint(s)", service, m.kind, m.pid, m.host,
+                 m.announced_frame, count);
     return true;
   }
   return false;

@@ -19,6 +19,8 @@ struct Member {
   bool alive = false;          // ready and heard from within the heartbeat timeout
   uint64_t stalled_frame = 0;  // missed the per-tick timeout on this frame: alive again only once it acks it
   int32_t pid = 0;
+  std::string host;
+  uint64_t announced_frame = 0;  // last_frame in its last announcement
   std::chrono::steady_clock::time_point last_heard;  // last announcement
   uint64_t last_frame = 0;     // last frame acked in the current run
   uint64_t last_hash = 0;      // state hash acked with last_frame

@@ -175,6 +175,7 @@ RenderService::RenderService(Bus& bus, std::string name, RenderOptions options)
       name_(std::move(name)),
       options_(std::move(options)),
       event_writer_(bus, topics::kEvent),
+      declarations_(bus),
       ground_(bus, topics::kGroundState),
       air_(bus, topics::kAirState),
       map_reader_(bus, topics::kMap, [this](const msg::MapData& m, const SampleInfo&) {
@@ -276,11 +277,16 @@ void RenderService::BeginRun(const msg::WorldInfo& world) {
                              w.sun_azimuth_angle(), w.sun_altitude_angle(), w.fog_density(), w.fog_distance(), w.fog_falloff(),
                              w.wetness(), w.scattering_intensity(), w.mie_scattering_scale(), w.rayleigh_scattering_scale(),
                              w.dust_storm()};
-  wait_ground_ = wait_air_ = false;
-  for (const auto& s : world.required_services()) {
-    if (s.to_string() == "ground_sim") wait_ground_ = true;
-    if (s.to_string() == "air_sim") wait_air_ = true;
+  // Whose state to wait for: the required services that simulate vehicles or walkers
+  // (GroundState) and drones (AirState), found by what they declare, not by their names.
+  const auto required = RequiredServices(world);
+  if (!declarations_.WaitFor(required, std::chrono::seconds(30))) {
+    throw InputError("render: the required services did not all declare their blueprints within 30 s");
   }
+  wait_ground_ = declarations_.AnyDeclares(msg::ActorKind::ACTOR_VEHICLE, required) ||
+                 declarations_.AnyDeclares(msg::ActorKind::ACTOR_WALKER, required);
+  wait_air_ = declarations_.AnyDeclares(msg::ActorKind::ACTOR_DRONE, required);
+  spdlog::info("run {}: state from {}{}", world.run(), wait_ground_ ? "GroundState " : "", wait_air_ ? "AirState" : "");
   spawned_.clear();
   cameras_.clear();
   previous_poses_.clear();

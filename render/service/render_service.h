@@ -14,6 +14,7 @@
 #include "lockstep/render/asset_import.h"
 #include "lockstep/render/camera_config.h"
 #include "lockstep/render/renderer.h"
+#include "lockstep/runtime/declarations.h"
 #include "lockstep/runtime/frame_buffer.h"
 #include "lockstep/runtime/service.h"
 
@@ -69,6 +70,7 @@ class RenderService final : public ServiceCore {
   RenderOptions options_;
   std::unique_ptr<render::Renderer> renderer_;
   Writer<msg::SimEvent> event_writer_;
+  Declarations declarations_;  // which required services simulate vehicles, walkers, drones
   FrameBuffer<msg::GroundState> ground_;
   FrameBuffer<msg::AirState> air_;
   std::mutex map_mu_;

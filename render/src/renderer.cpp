@@ -14,9 +14,19 @@ namespace lockstep::render {
 namespace {
 
 constexpr int kOutputs = 5;
+enum : std::uint32_t {
+  kFeatureColor = 1,
+  kFeatureShadows = 2,
+  kFeatureNight = 4,
+  kFeatureWet = 8,
+  kFeaturePuddles = 16,
+  kFeatureRain = 32,
+  kFeatureClouds = 64,
+  kFeatureVignette = 128,
+};
 constexpr int kSlots = 2;  // read-back double buffer: draw camera i+1 while camera i is copied out
-constexpr int kShadowSize = 2048;
-constexpr double kShadowExtent = 90;  // m, half width of the sun's shadow box around the first camera
+constexpr int kShadowSize = 1024;
+constexpr double kShadowExtent = 60;  // m, half width of the sun's shadow box around the first camera
 
 struct OutputFormat {
   std::uint32_t bit;
@@ -24,10 +34,12 @@ struct OutputFormat {
   int bytes;  // per pixel
 };
 const OutputFormat kFormats[kOutputs] = {
-    {kOutColor, GL_RGBA8, GL_BGRA, GL_UNSIGNED_BYTE, 4},
+    // Colour and normals are written B, G, R, A by the shader and read back as they are:
+    // a swizzle in glReadPixels takes llvmpipe's slow conversion path.
+    {kOutColor, GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, 4},
     {kOutLabels, GL_RGBA8UI, GL_RGBA_INTEGER, GL_UNSIGNED_BYTE, 4},
     {kOutDepth, GL_R32F, GL_RED, GL_FLOAT, 4},
-    {kOutNormals, GL_RGBA8, GL_BGRA, GL_UNSIGNED_BYTE, 4},
+    {kOutNormals, GL_RGBA8, GL_RGBA, GL_UNSIGNED_BYTE, 4},
     {kOutFlow, GL_RG32F, GL_RG, GL_FLOAT, 8},
 };
 
@@ -88,7 +100,10 @@ std::vector<Vec3> StreetLamps(const map::Scene& scene) {
 
 struct Renderer::Impl {
   GlContext context;
-  gl::Program scene, sky, shadow;
+  // Scene and sky programs per feature set (FEATURE_* defines), compiled on first use.
+  std::map<std::uint32_t, std::pair<gl::Program, gl::Program>> programs;
+  gl::Program shadow;
+  gl::Program* scene_ptr = nullptr;
   GLuint sky_vao = 0;
   StaticScene statics;
   // Models share one buffer, re-uploaded when one is added.
@@ -107,10 +122,8 @@ struct Renderer::Impl {
   RenderStats stats;
 
   explicit Impl(DevicePreference pref) : context(pref) {
-    scene = gl::Program(gl::BuildProgram(std::string(shaders::kCommon) + shaders::kSceneVertex,
-                                         std::string(shaders::kCommon) + shaders::kSceneFragment, "scene"));
-    sky = gl::Program(gl::BuildProgram(std::string(shaders::kCommon) + shaders::kSkyVertex,
-                                       std::string(shaders::kCommon) + shaders::kSkyFragment, "sky"));
+    Programs(0);  // labels only
+    Programs(kFeatureColor);
     shadow = gl::Program(gl::BuildProgram(shaders::kShadowVertex, shaders::kShadowFragment, "shadow"));
     glGenVertexArrays(1, &sky_vao);
     glGenVertexArrays(1, &model_vao);
@@ -159,9 +172,43 @@ struct Renderer::Impl {
     glDeleteBuffers(1, &model_vbo);
     glDeleteVertexArrays(1, &model_vao);
     glDeleteVertexArrays(1, &sky_vao);
-    glDeleteProgram(scene.id());
-    glDeleteProgram(sky.id());
+    for (auto& [mask, p] : programs) {
+      glDeleteProgram(p.first.id());
+      glDeleteProgram(p.second.id());
+    }
     glDeleteProgram(shadow.id());
+  }
+
+  std::pair<gl::Program, gl::Program>& Programs(std::uint32_t mask) {
+    auto it = programs.find(mask);
+    if (it != programs.end()) return it->second;
+    static const std::pair<std::uint32_t, const char*> defines[] = {
+        {kFeatureColor, "LOCKSTEP_COLOR"}, {kFeatureShadows, "FEATURE_SHADOWS"}, {kFeatureNight, "FEATURE_NIGHT"},
+        {kFeatureWet, "FEATURE_WET"},      {kFeaturePuddles, "FEATURE_PUDDLES"}, {kFeatureRain, "FEATURE_RAIN"},
+        {kFeatureClouds, "FEATURE_CLOUDS"}, {kFeatureVignette, "FEATURE_VIGNETTE"}};
+    const std::string common = shaders::kCommon;
+    std::string head = "#version 330 core\n";
+    for (const auto& [bit, name] : defines) {
+      if (mask & bit) head += std::string("#define ") + name + " 1\n";
+    }
+    head += common.substr(common.find('\n') + 1);
+    auto& p = programs[mask];
+    p.first = gl::Program(gl::BuildProgram(head + shaders::kSceneVertex, head + shaders::kSceneFragment, "scene"));
+    p.second = gl::Program(gl::BuildProgram(head + shaders::kSkyVertex, head + shaders::kSkyFragment, "sky"));
+    return p;
+  }
+
+  static std::uint32_t Features(const Camera& cam, const Lighting& l, bool shadows) {
+    if (!(cam.outputs & kOutColor)) return 0;
+    std::uint32_t m = kFeatureColor;
+    if (shadows) m |= kFeatureShadows;
+    if (l.night) m |= kFeatureNight;
+    if (l.wetness > 0) m |= kFeatureWet;
+    if (l.puddles > 0) m |= kFeaturePuddles;
+    if (l.rain > 0 && cam.post_process) m |= kFeatureRain;
+    if (l.clouds > 0.02f) m |= kFeatureClouds;
+    if (cam.lens_circle_multiplier > 0) m |= kFeatureVignette;
+    return m;
   }
 
   void AddTrafficLightModel() {
@@ -277,7 +324,7 @@ struct Renderer::Impl {
     shadow.Set("u_light_view_proj", vp);
     shadow.Set("u_model", Eigen::Matrix4f::Identity().eval());
     const Frustum fr(vp);
-    stats.triangles += statics.Draw(fr, c);
+    stats.triangles += statics.Draw(fr, c, true);
     glBindVertexArray(model_vao);
     for (const ActorDraw& a : world.actors) {
       auto it = models.find(a.model);
@@ -312,15 +359,17 @@ struct Renderer::Impl {
     glEnable(GL_CULL_FACE);
     glCullFace(GL_BACK);
     glFrontFace(GL_CW);
+    auto& variant = Programs(Features(cam, l, shadow_vp.has_value()));
+    gl::Program& scene = variant.first;
+    gl::Program& sky = variant.second;
+    scene_ptr = &scene;
     scene.Use();
     SetLighting(scene, l, cam);
     scene.Set("u_view_proj", vp);
     scene.Set("u_prev_view_proj", prev_vp);
     scene.Set("u_view", view);
-    scene.SetInt("u_night", l.night ? 1 : 0);
     scene.Set("u_wetness", l.wetness);
     scene.Set("u_puddles", l.puddles);
-    scene.SetInt("u_shadows", shadow_vp ? 1 : 0);
     if (shadow_vp) {
       glActiveTexture(GL_TEXTURE0);
       glBindTexture(GL_TEXTURE_2D, shadow_tex);
@@ -353,6 +402,7 @@ struct Renderer::Impl {
   }
 
   void SetNightLights(const Camera& cam, const WorldView& world, const Lighting& l) {
+    gl::Program& scene = *scene_ptr;
     int lamps = 0, spots = 0;
     if (l.night) {
       // The nearest street lamps and vehicle headlights light the scene.
@@ -388,6 +438,7 @@ struct Renderer::Impl {
   }
 
   void DrawActors(const WorldView& world, const Frustum& fr) {
+    gl::Program& scene = *scene_ptr;
     glBindVertexArray(model_vao);
     for (const ActorDraw& a : world.actors) {
       auto it = models.find(a.model);

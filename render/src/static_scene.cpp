@@ -180,7 +180,7 @@ void StaticScene::Build(const std::vector<map::Mesh>& meshes, const std::vector<
   glBindVertexArray(0);
 }
 
-std::uint64_t StaticScene::Draw(const Frustum& frustum, const Eigen::Vector3f& eye) const {
+std::uint64_t StaticScene::Draw(const Frustum& frustum, const Eigen::Vector3f& eye, bool casters_only) const {
   if (!vao) return 0;
   glBindVertexArray(vao);
   std::uint64_t drawn = 0;
@@ -192,8 +192,10 @@ std::uint64_t StaticScene::Draw(const Frustum& frustum, const Eigen::Vector3f& e
     if (d < options.detail_distance) count += c.large;
     if (d < options.detail_distance && d < options.small_distance) count += c.small;
     if (d < options.detail_distance && d < options.small_distance && d < options.marking_distance) count += c.markings;
-    if (count > 0) glDrawArrays(GL_TRIANGLES, c.first, count);
-    drawn += static_cast<std::uint64_t>(count) / 3;
+    const GLint first = casters_only ? c.first + c.base : c.first;
+    if (casters_only) count = std::min<GLsizei>(count - c.base, c.large + c.small);
+    if (count > 0) glDrawArrays(GL_TRIANGLES, first, count);
+    drawn += static_cast<std::uint64_t>(std::max<GLsizei>(count, 0)) / 3;
     if (d >= options.detail_distance && c.far.count > 0) {
       glDrawArrays(GL_TRIANGLES, c.far.first, c.far.count);
       drawn += static_cast<std::uint64_t>(c.far.count) / 3;

@@ -50,8 +50,9 @@ struct StaticScene {
   StaticSceneOptions options;
 
   void Build(const std::vector<map::Mesh>& meshes, const std::vector<Vec3>& lamp_positions, const StaticSceneOptions& opt);
-  // Appends the draws for one camera; returns the triangles drawn.
-  std::uint64_t Draw(const Frustum& frustum, const Eigen::Vector3f& eye) const;
+  // Appends the draws for one camera; returns the triangles drawn. casters_only: the sun's
+  // shadow pass, which leaves out the ground level (roads, sidewalks, terrain cast nothing).
+  std::uint64_t Draw(const Frustum& frustum, const Eigen::Vector3f& eye, bool casters_only = false) const;
   void Release();
 };
 

@@ -617,7 +617,7 @@ PYBIND11_MODULE(_lockstep, m) {
     y.yaw_or_rate = v;
     return y;
   };
-  auto drive = [](int d) { return d == 0 ? NedDrivetrain::kForwardOnly : NedDrivetrain::kMaxDegreeOfFreedom; };
+  auto drive = [](int d) { return d == 1 ? NedDrivetrain::kForwardOnly : NedDrivetrain::kMaxDegreeOfFreedom; };
 
   py::class_<CommandFuture>(m, "CommandFuture")
       .def("join", &CommandFuture::join, py::arg("timeout") = -1.0, py::call_guard<py::gil_scoped_release>())

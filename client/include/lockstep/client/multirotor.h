@@ -27,7 +27,7 @@ struct NedYawMode {
   double yaw_or_rate = 0;     // deg (heading, 0 = north, clockwise) or deg/s
 };
 
-enum class NedDrivetrain { kMaxDegreeOfFreedom = 1, kForwardOnly = 0 };  // AirSim's values
+enum class NedDrivetrain { kMaxDegreeOfFreedom = 0, kForwardOnly = 1 };  // AirSim's values
 
 struct NedKinematics {
   Ned position, linear_velocity, linear_acceleration;  // world NED from home

@@ -80,7 +80,8 @@ int DefaultDomain() {
 
 struct Client::Impl {
   ClientOptions options;
-  std::unique_ptr<Bus> bus;
+  std::unique_ptr<Bus> owned_bus;  // a DDS participant of our own, unless options.bus was given
+  Bus* bus = nullptr;
 
   mutable std::mutex mu;
   mutable std::condition_variable cv;
@@ -143,7 +144,12 @@ struct Client::Impl {
     DdsOptions dds;
     dds.domain_id = options.domain;
     dds.participant_name = options.name;
-    bus = CreateDdsBus(dds);
+    if (options.bus != nullptr) {
+      bus = options.bus;
+    } else {
+      owned_bus = CreateDdsBus(dds);
+      bus = owned_bus.get();
+    }
     dispatcher = std::thread([this] { Dispatch(); });
     commands = Writer<msg::Command>(*bus, topics::kCommand);
     world_reader = Reader<msg::WorldInfo>(*bus, topics::kWorldInfo, [this](const msg::WorldInfo& w, const SampleInfo&) {
@@ -181,10 +187,17 @@ struct Client::Impl {
       auto p = std::make_shared<const msg::AirState>(a);
       Update([&] { OnAir(std::move(p)); });
     });
-    Connect();
+    try {
+      Connect();
+    } catch (...) {
+      Shutdown();
+      throw;
+    }
   }
 
-  ~Impl() {
+  ~Impl() { Shutdown(); }
+
+  void Shutdown() {
     // Readers first, so no callback runs while the rest goes away.
     air_reader = {};
     ground_reader = {};
@@ -205,7 +218,7 @@ struct Client::Impl {
     }
     cv.notify_all();
     if (dispatcher.joinable()) dispatcher.join();
-    if (commands) commands.WaitForAcknowledgments(0.5);
+    if (commands && commands.MatchedReaders() > 0) commands.WaitForAcknowledgments(0.5);
   }
 
   template <class F>
@@ -504,6 +517,15 @@ const ClientOptions& Client::options() const { return impl_->options; }
 msg::WorldInfo Client::world_info() const {
   std::lock_guard<std::mutex> lock(impl_->mu);
   return *impl_->world;
+}
+
+bool Client::wait_ready(double timeout_s) {
+  std::unique_lock<std::mutex> lock(impl_->mu);
+  return impl_->WaitUntil(lock, Deadline(timeout_s), [&] {
+    const auto& s = impl_->status;
+    return s && s->run() == impl_->world->run() &&
+           (s->state() == msg::RunState::RUN_READY || s->state() == msg::RunState::RUN_RUNNING);
+  });
 }
 
 std::optional<msg::RunStatus> Client::run_status() const {

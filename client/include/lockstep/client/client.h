@@ -63,6 +63,7 @@ struct ClientOptions {
   double sensor_timeout_s = 10;  // s, how long tick() waits for a listened sensor's frame
   double state_timeout_s = 2;    // s, how long tick() waits for the frame's ground / air state
   std::string name;              // unique client name; empty = "client-<host>-<pid>-<n>"
+  Bus* bus = nullptr;            // an existing bus (tests: the in-process bus); null = a new DDS participant
 };
 
 // An actor of the current run: what its spawn said (from the ticks and our replies).
@@ -122,6 +123,8 @@ class Client {
 
   // --- world ---
   msg::WorldInfo world_info() const;
+  // Waits until every required service has joined (run ready or running); false on timeout.
+  bool wait_ready(double timeout_s);
   std::optional<msg::RunStatus> run_status() const;
   uint32_t run() const;
   uint64_t frame() const;  // last completed frame of the current run (0 = none yet)

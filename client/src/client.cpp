@@ -463,9 +463,11 @@ struct Client::Impl {
   // After frame k of `run` completed: the ground / air state of k (from the services
   // that publish one), then every listened per-frame sensor's data of its frame.
   void AwaitFrameOutputs(uint32_t run, uint64_t k) {
-    const bool has_ground = ground_reader.MatchedWriters() > 0;
-    const bool has_air = air_reader.MatchedWriters() > 0;
     std::unique_lock<std::mutex> lock(mu);
+    // A state topic counts when its writer is matched, or (right after connecting, before
+    // discovery finished) when a member of the run is the service kind that publishes it.
+    const bool has_ground = ground_reader.MatchedWriters() > 0 || MemberOfKind("ground_sim");
+    const bool has_air = air_reader.MatchedWriters() > 0 || MemberOfKind("air_sim");
     const auto state_deadline = Deadline(options.state_timeout_s);
     WaitUntil(lock, state_deadline, [&] {
       return (!has_ground || ground.count({run, k})) && (!has_air || air.count({run, k}));
@@ -494,6 +496,14 @@ struct Client::Impl {
                            " s (is the service that owns them running?)",
                        ids, pk);
     }
+  }
+
+  bool MemberOfKind(const std::string& kind) const {
+    if (!status) return false;
+    for (const auto& m : status->members()) {
+      if (m.alive() && m.kind().to_string() == kind) return true;
+    }
+    return false;
   }
 
   std::string FaultReason() const {
@@ -811,19 +821,15 @@ msg::DroneCommandStatus Client::wait_drone(uint32_t actor, uint64_t command_id, 
         s.cv.wait_until(lock, std::min(deadline, Clock::now() + std::chrono::milliseconds(200)), [&] {
           return s.drone_finished.count({actor, command_id}) || (!s.air.empty() && s.air.rbegin()->first.second != seen);
         });
-        if (!s.air.empty() && s.air.rbegin()->second->stamp().run() == s.world->run()) {
-          bool present = false;
-          for (const auto& d : s.air.rbegin()->second->drones()) present |= d.actor() == actor;
-          if (!present && !s.drone_finished.count({actor, command_id})) {
-            throw ClientError("drone " + std::to_string(actor) + " is gone (destroyed, or a new run began)");
-          }
+        if (!s.drone_finished.count({actor, command_id}) && (s.actors_run != s.world->run() || !s.actors.count(actor))) {
+          throw ClientError("drone " + std::to_string(actor) + " is gone (destroyed, or a new run began)");
         }
         continue;
       }
     }
     tick();  // synchronous mode: this client drives the clock while it waits
-    auto st = drone_state(actor);
-    if (!st && !s.drone_finished.count({actor, command_id})) {
+    std::lock_guard<std::mutex> lock(s.mu);
+    if (!s.drone_finished.count({actor, command_id}) && (s.actors_run != s.world->run() || !s.actors.count(actor))) {
       throw ClientError("drone " + std::to_string(actor) + " is gone (destroyed, or a new run began)");
     }
   }

@@ -444,6 +444,7 @@ PYBIND11_MODULE(_lockstep, m) {
              d["members"] = members;
              return d;
            })
+      .def("wait_ready", &Client::wait_ready, py::arg("timeout") = 10.0, py::call_guard<py::gil_scoped_release>())
       .def("run", &Client::run)
       .def("frame", &Client::frame)
       .def("apply_settings",

@@ -402,12 +402,13 @@ std::string RenderService::ModelFor(uint32_t id, const Spawned& s, const render:
 }
 
 render::WorldView RenderService::BuildWorld(const msg::GroundState* ground, const msg::AirState* air, double sim_time,
-                                            std::map<uint32_t, render::Pose>* poses) {
+                                            std::map<uint32_t, render::Pose>* poses, std::map<uint32_t, render::Pose>* mounts) {
   render::WorldView w;
   w.weather = weather_;
   const bool night = render::ComputeLighting(weather_).night;
-  auto add = [&](uint32_t id, const std::string& blueprint, const render::Pose& pose, const render::Vec3& he) {
+  auto add = [&](uint32_t id, const std::string& blueprint, const render::Pose& pose, const render::Vec3& he, bool mount_at_bottom) {
     (*poses)[id] = pose;
+    (*mounts)[id] = mount_at_bottom ? pose * render::Pose{render::Vec3(0, 0, -he.z()), render::Quat::Identity()} : pose;
     auto it = spawned_.find(id);
     Spawned s = it != spawned_.end() ? it->second : Spawned{};
     if (s.blueprint.empty()) s.blueprint = blueprint;
@@ -423,8 +424,8 @@ render::WorldView RenderService::BuildWorld(const msg::GroundState* ground, cons
     w.actors.push_back(std::move(a));
   };
   if (ground) {
-    for (const auto& v : ground->vehicles()) add(v.actor(), v.blueprint().to_string(), ToPose(v.transform()), ToVec(v.half_extents()));
-    for (const auto& v : ground->walkers()) add(v.actor(), v.blueprint().to_string(), ToPose(v.transform()), ToVec(v.half_extents()));
+    for (const auto& v : ground->vehicles()) add(v.actor(), v.blueprint().to_string(), ToPose(v.transform()), ToVec(v.half_extents()), true);
+    for (const auto& v : ground->walkers()) add(v.actor(), v.blueprint().to_string(), ToPose(v.transform()), ToVec(v.half_extents()), true);
     for (const auto& t : ground->traffic_lights()) {
       render::TrafficLightDraw d;
       d.id = t.actor();
@@ -440,14 +441,14 @@ render::WorldView RenderService::BuildWorld(const msg::GroundState* ground, cons
         case msg::TrafficLightColor::LIGHT_GREEN: d.state = 2; break;
         default: d.state = 3; break;
       }
-      (*poses)[t.actor()] = d.pose;
+      (*mounts)[t.actor()] = d.pose;
       w.traffic_lights.push_back(d);
     }
   }
   if (air) {
     for (const auto& d : air->drones()) {
       const std::size_t before = w.actors.size();
-      add(d.actor(), d.blueprint().to_string(), ToPose(d.transform()), render::Vec3(0.3, 0.3, 0.1));
+      add(d.actor(), d.blueprint().to_string(), ToPose(d.transform()), render::Vec3(0.3, 0.3, 0.1), false);
       if (w.actors.size() > before) {
         // Rotor angle from the rotor speed at this frame's time: a pure function of the state.
         for (const auto& r : d.rotors()) w.actors.back().rotor_angles.push_back(std::fmod(r.speed() * sim_time, 2 * M_PI));
@@ -459,11 +460,12 @@ render::WorldView RenderService::BuildWorld(const msg::GroundState* ground, cons
     if (s.blueprint.rfind("custom.", 0) != 0 || !renderer_->HasModel(s.blueprint)) continue;
     render::Pose pose = s.transform;
     if (s.parent) {
-      auto p = poses->find(s.parent);
-      if (p == poses->end()) continue;
+      auto p = mounts->find(s.parent);
+      if (p == mounts->end()) continue;
       pose = p->second * s.transform;
     }
     (*poses)[id] = pose;
+    (*mounts)[id] = pose;
     render::ActorDraw a;
     a.id = id;
     a.model = s.blueprint;
@@ -498,8 +500,8 @@ void RenderService::Step(const msg::Tick& tick) {
   if (wait_air_ && !(air = air_.WaitFor(tick.run(), k, timeout))) {
     throw InputError("render: no AirState of frame " + std::to_string(k) + " within " + std::to_string(options_.input_timeout_s) + " s");
   }
-  std::map<uint32_t, render::Pose> poses;
-  render::WorldView world = BuildWorld(ground ? &*ground : nullptr, air ? &*air : nullptr, stamp.sim_time(), &poses);
+  std::map<uint32_t, render::Pose> poses, mounts;
+  render::WorldView world = BuildWorld(ground ? &*ground : nullptr, air ? &*air : nullptr, stamp.sim_time(), &poses, &mounts);
   // Cameras due now, grouped: cameras with one pose and one lens share a pass.
   struct Pass {
     render::Camera camera;
@@ -511,8 +513,8 @@ void RenderService::Step(const msg::Tick& tick) {
     if (tick_s > 0 && stamp.sim_time() - cam->last_capture < tick_s - 1e-9) continue;
     render::Pose pose = cam->relative;
     if (cam->parent) {
-      auto p = poses.find(cam->parent);
-      if (p == poses.end()) continue;  // the parent is not in this frame's state (yet)
+      auto p = mounts.find(cam->parent);
+      if (p == mounts.end()) continue;  // the parent is not in this frame's state (yet)
       pose = p->second * cam->relative;
     }
     render::Camera view = cam->settings.camera;

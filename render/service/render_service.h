@@ -59,8 +59,11 @@ class RenderService final : public ServiceCore {
   void LoadTown(const msg::WorldInfo& world);
   bool Mine(const msg::SpawnActor& s) const;
   void Fail(const msg::FrameStamp& stamp, uint32_t actor, const std::string& why);
+  // poses: each actor's drawn pose (bounding box centre); mounts: the frame a camera's
+  // relative transform is given in (as CARLA: vehicles and walkers at the bottom of their
+  // box, drones at their centre).
   render::WorldView BuildWorld(const msg::GroundState* ground, const msg::AirState* air, double sim_time,
-                               std::map<uint32_t, render::Pose>* poses);
+                               std::map<uint32_t, render::Pose>* poses, std::map<uint32_t, render::Pose>* mounts);
   std::string ModelFor(uint32_t id, const Spawned& s, const render::Vec3& half_extents);
   void Publish(CameraRecord& cam, const render::Camera& view, const render::CameraImages& images, const msg::FrameStamp& stamp);
   void Save(const CameraRecord& cam, const render::CameraImages& images, uint64_t frame);

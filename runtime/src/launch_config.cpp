@@ -133,11 +133,22 @@ ScheduledCommand LoadStep(YamlMap m, uint64_t index) {
     m.Require("as", &s.alias);
     msg::Vector3 at;
     if (YAML::Node n = m.Child("at")) at = Vec(m, "at", n);
-    double yaw = 0;  // rad, ENU heading
+    double yaw = 0, pitch = 0;  // rad: ENU heading; nose up (cameras)
     m.Get("yaw", &yaw);
+    m.Get("pitch", &pitch);
     std::map<std::string, std::string> attrs;
     m.Get("attributes", &attrs);
-    body = SpawnBody(spawn, MakePose(at.x(), at.y(), at.z(), yaw), AttributeList(attrs.begin(), attrs.end()));
+    msg::Pose pose = MakePose(at.x(), at.y(), at.z(), yaw);
+    if (pitch != 0) {  // yaw about z, then pitch about the new y (nose up = negative rotation about y)
+      const double cy = std::cos(yaw / 2), sy = std::sin(yaw / 2), cp = std::cos(-pitch / 2), sp = std::sin(-pitch / 2);
+      pose.orientation().w(cy * cp);
+      pose.orientation().x(-sy * sp);
+      pose.orientation().y(cy * sp);
+      pose.orientation().z(sy * cp);
+    }
+    body = SpawnBody(spawn, pose, AttributeList(attrs.begin(), attrs.end()));
+    // attach_to: an earlier step's alias; `at`, `yaw` and `pitch` are then relative to it.
+    m.Get("attach_to", &s.actor_alias);
   } else if (m.Get("drone", &drone)) {
     msg::DroneCommand d;
     m.Require("actor", &s.actor_alias);

@@ -32,7 +32,7 @@ int QosHistoryDepth(QosKind kind) {
 }
 
 bool QosTransientLocal(QosKind kind) {
-  return kind == QosKind::kClock || kind == QosKind::kMembership || kind == QosKind::kState;
+  return kind == QosKind::kClock || kind == QosKind::kMembership || kind == QosKind::kState || kind == QosKind::kImage;
 }
 
 std::string DefaultQosFile() { return LOCKSTEP_DEFAULT_QOS_FILE; }

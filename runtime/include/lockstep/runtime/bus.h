@@ -19,7 +19,7 @@ enum class QosKind {
   kState,       // RELIABLE, KEEP_LAST 4, TRANSIENT_LOCAL: ground / air state
   kEvent,       // RELIABLE, KEEP_LAST 64, VOLATILE
   kSensor,      // RELIABLE, KEEP_LAST 2, VOLATILE: point clouds, IMU, ...
-  kImage,       // as kSensor, preallocated history and data-sharing: camera images
+  kImage,       // RELIABLE, KEEP_LAST 2, TRANSIENT_LOCAL, preallocated, data-sharing: camera images
 };
 const char* QosFamilyName(QosKind kind);
 int QosHistoryDepth(QosKind kind);

@@ -12,10 +12,9 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 AttributeSpec F(const std::string& id, double def, double min = -kInf, double max = kInf) {
-  std::ostringstream s;
-  s.precision(17);
-  s << def;
-  return {id, AttrType::kFloat, s.str(), min, max};
+  char buf[64];
+  auto [end, ec] = std::to_chars(buf, buf + sizeof buf, def);  // shortest text that reads back exactly
+  return {id, AttrType::kFloat, std::string(buf, ec == std::errc() ? end : buf), min, max};
 }
 AttributeSpec I(const std::string& id, int64_t def, double min, double max) {
   return {id, AttrType::kInt, std::to_string(def), min, max};

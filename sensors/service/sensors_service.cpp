@@ -139,6 +139,7 @@ SensorsService::SensorsService(Bus& bus, std::string name, SensorsOptions option
       collision_writer_(bus, topics::kCollision),
       lane_invasion_writer_(bus, topics::kLaneInvasion),
       event_writer_(bus, topics::kEvent),
+      declarations_(bus),
       ground_(bus, topics::kGroundState, 16),
       air_(bus, topics::kAirState, 16),
       events_(bus),
@@ -208,21 +209,27 @@ void SensorsService::BeginRun(const msg::WorldInfo& world) {
   seed_ = world.seed();
   run_ = world.run();
   weather_ = s::Weather{world.weather().precipitation(), world.weather().fog_density()};
-  ground_in_run_ = air_in_run_ = false;
-  event_publishers_.clear();
-  for (const auto& sv : world.required_services()) {
-    const std::string n = sv.to_string();
-    if (n == "ground_sim") ground_in_run_ = true;
-    if (n == "air_sim") air_in_run_ = true;
-    if (n == "ground_sim" || n == "air_sim") event_publishers_.insert(n);
+  // The physics inputs, by what the required services simulate (never by their names):
+  // vehicles or walkers come in GroundState, drones in AirState, and each of those
+  // services publishes one PhysicsEvents batch per frame.
+  const std::vector<std::string> required = RequiredServices(world);
+  if (!declarations_.WaitFor(required, std::chrono::milliseconds(static_cast<int64_t>(options_.input_timeout_s * 1000)))) {
+    throw InputError("sensors: not every required service declared its blueprints within the input timeout");
   }
+  event_publishers_.clear();
+  const auto ground = declarations_.Declaring(msg::ActorKind::ACTOR_VEHICLE, required);
+  const auto walkers = declarations_.Declaring(msg::ActorKind::ACTOR_WALKER, required);
+  const auto air = declarations_.Declaring(msg::ActorKind::ACTOR_DRONE, required);
+  ground_in_run_ = !ground.empty() || !walkers.empty();
+  air_in_run_ = !air.empty();
+  for (const auto* list : {&ground, &walkers, &air}) event_publishers_.insert(list->begin(), list->end());
   world_ = std::make_unique<s::SensorWorld>(seed_, geo_);
   world_->set_weather(weather_);
   if (town_meshes_) world_->scene().SetStatic(*town_meshes_);
   files_.reset();
-  spdlog::info("run {}: seed {}, perception {}, physics inputs:{}{}", run_, seed_,
-               mode_ == msg::PerceptionMode::PERCEPTION_PIPELINED ? "pipelined" : "strict", ground_in_run_ ? " ground_sim" : "",
-               air_in_run_ ? " air_sim" : "");
+  spdlog::info("run {}: seed {}, perception {}, inputs:{}{}", run_, seed_,
+               mode_ == msg::PerceptionMode::PERCEPTION_PIPELINED ? "pipelined" : "strict", ground_in_run_ ? " GroundState" : "",
+               air_in_run_ ? " AirState" : "");
 }
 
 void SensorsService::Fail(const msg::FrameStamp& stamp, uint32_t actor, const std::string& why) {

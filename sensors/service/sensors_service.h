@@ -12,6 +12,7 @@
 #include <set>
 #include <string>
 
+#include "lockstep/runtime/declarations.h"
 #include "lockstep/runtime/frame_buffer.h"
 #include "lockstep/runtime/service.h"
 #include "lockstep/sensors/sensor_world.h"
@@ -93,6 +94,7 @@ class SensorsService final : public ServiceCore {
   Writer<msg::CollisionEvent> collision_writer_;
   Writer<msg::LaneInvasionEvent> lane_invasion_writer_;
   Writer<msg::SimEvent> event_writer_;
+  Declarations declarations_;  // which required services simulate vehicles, walkers, drones
   FrameBuffer<msg::GroundState> ground_;
   FrameBuffer<msg::AirState> air_;
   PhysicsEventsBuffer events_;

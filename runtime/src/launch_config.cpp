@@ -120,7 +120,7 @@ msg::DroneCommandKind DroneKind(YamlMap& m, const std::string& name) {
   return it->second;
 }
 
-// One scenario step: {frame, spawn, as, at, yaw, attributes} or {frame, actor, drone, ...}.
+// One scenario step: {frame, spawn, as, at, yaw, attributes, parent} or {frame, actor, drone, ...}.
 ScheduledCommand LoadStep(YamlMap m, uint64_t index) {
   ScheduledCommand s;
   s.command.client("scenario");
@@ -138,6 +138,7 @@ ScheduledCommand LoadStep(YamlMap m, uint64_t index) {
     m.Get("pitch", &pitch);
     std::map<std::string, std::string> attrs;
     m.Get("attributes", &attrs);
+    m.Get("parent", &s.actor_alias);  // attach to this actor (by alias): `at`, `yaw` and `pitch` are then relative to it
     msg::Pose pose = MakePose(at.x(), at.y(), at.z(), yaw);
     if (pitch != 0) {  // yaw about z, then pitch about the new y (nose up = negative rotation about y)
       const double cy = std::cos(yaw / 2), sy = std::sin(yaw / 2), cp = std::cos(-pitch / 2), sp = std::sin(-pitch / 2);
@@ -147,8 +148,6 @@ ScheduledCommand LoadStep(YamlMap m, uint64_t index) {
       pose.orientation().z(sy * cp);
     }
     body = SpawnBody(spawn, pose, AttributeList(attrs.begin(), attrs.end()));
-    // attach_to: an earlier step's alias; `at`, `yaw` and `pitch` are then relative to it.
-    m.Get("attach_to", &s.actor_alias);
   } else if (m.Get("drone", &drone)) {
     msg::DroneCommand d;
     m.Require("actor", &s.actor_alias);

@@ -516,6 +516,7 @@ struct Client::Impl {
       case SensorType::kCollision: MakeSensorReader(type, topics::kCollision); break;
       case SensorType::kLaneInvasion: MakeSensorReader(type, topics::kLaneInvasion); break;
       case SensorType::kObstacle: MakeSensorReader(type, topics::kObstacle); break;
+      case SensorType::kDistance: MakeSensorReader(type, topics::kDistance); break;
     }
   }
 

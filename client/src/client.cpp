@@ -280,15 +280,13 @@ struct Client::Impl {
     const auto state_deadline = std::min(deadline, Deadline(options.state_timeout_s));
     WaitUntil(lock, state_deadline, [&] { return status.has_value(); });
     if (status && status->frame() > 0) {
+      // The states of the last completed frame (FrameDone is TRANSIENT_LOCAL too): the
+      // writers replay several frames, and the newest must be in before we answer.
       const uint32_t run = world->run();
-      auto has = [&](const auto& m) {
-        for (const auto& [rf, st] : m) {
-          if (rf.first == run) return true;
-        }
-        return false;
-      };
+      auto has = [&](const auto& m) { return !m.empty() && m.rbegin()->first >= done; };
       WaitUntil(lock, state_deadline, [&] {
-        return (!MemberOfKind("air_sim") || has(air)) && (!MemberOfKind("ground_sim") || has(ground));
+        return done.first == run && done.second > 0 && (!MemberOfKind("air_sim") || has(air)) &&
+               (!MemberOfKind("ground_sim") || has(ground));
       });
     }
   }

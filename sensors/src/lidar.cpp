@@ -65,28 +65,33 @@ PointCloudSample Lidar::Scan(const RayScene& scene, const Pose& pose, double dt,
   const double tick_angle = frequency_ * hfov_ * dt;
   const double step = tick_angle / per_channel;
 
+  // The slice's columns: CARLA's yaw is clockwise seen from above (Unreal's y points
+  // right), so a column at yaw h has FLU direction (cos h, -sin h) before the elevation.
+  column_cos_.resize(per_channel);
+  column_sin_.resize(per_channel);
+  for (long i = 0; i < per_channel; ++i) {
+    const double h = (std::fmod(angle_ + step * static_cast<double>(i), hfov_) - hfov_ / 2) * kDeg;
+    column_cos_[i] = std::cos(h);
+    column_sin_[i] = -std::sin(h);
+  }
   // RayPreprocessCondition: each ray is kept unless dropoff_general_rate > U[0,1).
   rays_.clear();
   ray_channel_.clear();
   ray_local_.clear();
   const Eigen::Matrix3d r = pose.orientation.toRotationMatrix();
+  const float ox = static_cast<float>(pose.position.x()), oy = static_cast<float>(pose.position.y()),
+              oz = static_cast<float>(pose.position.z());
   for (int ch = 0; ch < channels_; ++ch) {
     const double v = vertical_[ch] * kDeg;
     const double cv = std::cos(v), sv = std::sin(v);
     for (long i = 0; i < per_channel; ++i) {
-      const bool keep = semantic_ || !(drop_general_ > rng_.Uniform());
+      const bool keep = semantic_ || drop_general_ <= 0 || !(drop_general_ > rng_.Uniform());
       if (!keep) continue;
-      // CARLA's yaw is clockwise seen from above (Unreal's y points right): FLU y = -sin.
-      const double h = (std::fmod(angle_ + step * static_cast<double>(i), hfov_) - hfov_ / 2) * kDeg;
-      const Vec3 local(cv * std::cos(h), -cv * std::sin(h), sv);
+      const Vec3 local(cv * column_cos_[i], cv * column_sin_[i], sv);
       const Vec3 world = r * local;
-      Ray ray;
-      for (int k = 0; k < 3; ++k) {
-        ray.origin[k] = static_cast<float>(pose.position[k]);
-        ray.dir[k] = static_cast<float>(world[k]);
-      }
-      ray.tfar = static_cast<float>(range_);
-      rays_.push_back(ray);
+      rays_.push_back(Ray{{ox, oy, oz},
+                          {static_cast<float>(world.x()), static_cast<float>(world.y()), static_cast<float>(world.z())},
+                          static_cast<float>(range_)});
       ray_channel_.push_back(static_cast<uint32_t>(ch));
       ray_local_.push_back(local);
     }

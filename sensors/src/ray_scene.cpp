@@ -208,6 +208,7 @@ size_t RayScene::actor_count() const { return impl_->actors.size(); }
 void RayScene::Intersect(const Ray* rays, Hit* hits, size_t n) const {
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
+  ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;  // neighbouring rays: LiDAR columns, radar cones
   alignas(64) RTCRayHit16 p;
   alignas(64) int valid[16];
   for (size_t base = 0; base < n; base += 16) {

@@ -1,5 +1,5 @@
 // `lockstep up` with the sensors service as its own process: a LiDAR, an IMU and a GNSS
-// ride a drone over the generated town (attached by the scenario's attach_to), and every
+// ride a drone over the generated town (attached by the scenario's parent key), and every
 // frame of the run is written once, in order: a PLY per LiDAR sample, a CSV row per
 // inertial sample.
 #include <gtest/gtest.h>
@@ -35,10 +35,10 @@ TEST(SensorsProcess, WritesEveryFramesSamplesOnceInOrder) {
           "services:\n  - {name: air_sim, kind: air_sim}\n  - {name: sensors, kind: sensors, perception: true}\n"
           "scenario:\n"
           "  - {frame: 1, spawn: drone.generic_quad, as: d, at: [47.75, 1.75, 0]}\n"
-          "  - {frame: 1, spawn: sensor.lidar.ray_cast, as: lidar, attach_to: d, at: [0, 0, -0.1],"
+          "  - {frame: 1, spawn: sensor.lidar.ray_cast, as: lidar, parent: d, at: [0, 0, -0.1],"
           " attributes: {range: 50, channels: 16, lower_fov: -60}}\n"
-          "  - {frame: 1, spawn: sensor.other.imu, as: imu, attach_to: d}\n"
-          "  - {frame: 1, spawn: sensor.other.gnss, as: gnss, attach_to: d}\n"
+          "  - {frame: 1, spawn: sensor.other.imu, as: imu, parent: d}\n"
+          "  - {frame: 1, spawn: sensor.other.gnss, as: gnss, parent: d}\n"
           "  - {frame: 2, actor: d, drone: arm}\n"
           "  - {frame: 3, actor: d, drone: takeoff}\n");
   Process up({Bin("lockstep"), "up", config});

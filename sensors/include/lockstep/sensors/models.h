@@ -88,6 +88,7 @@ class Lidar {
   std::vector<Hit> hits_;
   std::vector<uint32_t> ray_channel_;
   std::vector<Vec3> ray_local_;
+  std::vector<double> column_cos_, column_sin_;
 };
 
 class Radar {

@@ -38,6 +38,28 @@ def progress(done, total, started, extra=''):
     sys.stdout.flush()
 
 
+def write_config(out, seed):
+    """A launch config with every service built on this machine (air_sim always; ground_sim,
+    sensors, render when their programs exist), synchronous, in the training town."""
+    bin_dir = os.path.join(ROOT, 'build', 'bin')
+    services = ['  - {name: air_sim, kind: air_sim}']
+    for kind, perception in (('ground_sim', False), ('sensors', True), ('render', True)):
+        if os.path.exists(os.path.join(bin_dir, 'lockstep_' + kind)):
+            services.append('  - {name: %s, kind: %s, perception: %s}' % (kind, kind, 'true' if perception else 'false'))
+    services.append('  - {name: recorder, kind: recorder, perception: true}')
+    text = '\n'.join([
+        '# Written by examples/showcase.py: every service built on this machine.',
+        'name: showcase', 'domain_id: 0', 'seed: %d' % seed,
+        'map: %s' % os.path.join(ROOT, 'build', 'maps', 'generated', 'LockstepTown1.xodr'),
+        'output_dir: %s' % os.path.abspath(out),
+        'world:', '  synchronous_mode: true', '  fixed_delta_seconds: 0.05', '  service_timeout: 60',
+        'services:'] + services) + '\n'
+    path = os.path.join(out, 'showcase.yaml')
+    with open(path, 'w') as f:
+        f.write(text)
+    return path
+
+
 def town_picture(world_map, trajectories, path, size=1024):
     """The road network from above, with each trajectory drawn over it (PNG)."""
     from lockstep.carla.sensor_data import write_png
@@ -47,7 +69,7 @@ def town_picture(world_map, trajectories, path, size=1024):
     xs, ys = [p[0] for p in pts], [p[1] for p in pts]
     x0, x1, y0, y1 = min(xs) - 10, max(xs) + 10, min(ys) - 10, max(ys) + 10
     scale = (size - 1) / max(x1 - x0, y1 - y0)
-    img = np.full((size, size, 3), 245, dtype=np.uint8)
+    img = np.full((int((y1 - y0) * scale) + 1, int((x1 - x0) * scale) + 1, 3), 245, dtype=np.uint8)
 
     def to_px(x, y):
         # CARLA y grows "down" on a map seen from above (left-handed), like image rows.
@@ -55,7 +77,7 @@ def town_picture(world_map, trajectories, path, size=1024):
 
     def dot(x, y, color, r):
         cx, cy = to_px(x, y)
-        img[max(cy - r, 0):cy + r + 1, max(cx - r, 0):cx + r + 1] = color
+        img[max(cy - r, 0):max(cy + r + 1, 0), max(cx - r, 0):max(cx + r + 1, 0)] = color
 
     for x, y in pts[:len(pts) - sum(len(t['xy']) for t in trajectories.values())]:
         dot(x, y, (150, 150, 150), 1)
@@ -71,7 +93,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument('--ticks', type=int, default=400)
     parser.add_argument('--out', default=os.path.join(ROOT, 'out', 'showcase'))
-    parser.add_argument('--config', default=os.path.join(ROOT, 'deploy', 'configs', 'showcase.yaml'))
+    parser.add_argument('--config', default='', help='launch config; default: every service built, written to --out')
     parser.add_argument('--connect', action='store_true', help='use the simulation already running')
     parser.add_argument('--cars', type=int, default=12)
     parser.add_argument('--walkers', type=int, default=10)
@@ -82,9 +104,11 @@ def main():
     os.makedirs(args.out, exist_ok=True)
 
     sim = None
+    if not args.connect and not args.config:
+        args.config = write_config(args.out, args.seed)
     if not args.connect:
         os.environ.setdefault('LOCKSTEP_DOMAIN', str(int(os.environ.get('LOCKSTEP_DOMAIN', '0'))))
-        print('starting the simulation: %s' % os.path.relpath(args.config, ROOT))
+        print('starting the simulation: %s (DDS domain %s)' % (os.path.relpath(args.config), os.environ['LOCKSTEP_DOMAIN']))
         sim = subprocess.Popen([os.path.join(ROOT, 'build', 'bin', 'lockstep'), 'up', args.config,
                                 '--domain', os.environ['LOCKSTEP_DOMAIN']],
                                stdout=open(os.path.join(args.out, 'services.log'), 'w'), stderr=subprocess.STDOUT)

@@ -55,3 +55,16 @@ def test_drone_follow_car(sim):
 def test_cars_and_drones(sim):
     out = run(sim, 'cars_and_drones.py', '--ticks', '100')
     assert '100/100 ticks with ground and air state of the same frame' in out
+
+
+def test_showcase(sim):
+    import json
+    out_dir = os.path.join(sim.dir, 'showcase')
+    out = run(sim, 'showcase.py', '--connect', '--ticks', '40', '--out', out_dir, '--cars', '3', '--walkers', '2')
+    assert 'Lockstep showcase' in out
+    summary = json.load(open(os.path.join(out_dir, 'summary.json')))
+    assert summary['ticks'] == 40
+    assert summary['ground_air_frame_alignment'] == '40/40 ticks'
+    assert all(summary['sensor_frames_in_order_once'].values())
+    assert os.path.getsize(os.path.join(out_dir, 'town.png')) > 0
+    assert len(open(os.path.join(out_dir, 'ticks.csv')).readlines()) == 41

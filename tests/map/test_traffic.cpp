@@ -35,7 +35,8 @@ const Map& Crossing() {
         "<lanes>" + lanes + "</lanes>"
         "<objects><object id=\"cw\" type=\"crosswalk\" s=\"20\" t=\"0\" zOffset=\"0\" hdg=\"0\" length=\"3\" width=\"7\">"
         "<outline><cornerLocal u=\"-1.5\" v=\"-3.5\" z=\"0\"/><cornerLocal u=\"1.5\" v=\"-3.5\" z=\"0\"/>"
-        "<cornerLocal u=\"1.5\" v=\"3.5\" z=\"0\"/><cornerLocal u=\"-1.5\" v=\"3.5\" z=\"0\"/></outline></object></objects>"
+        "<cornerLocal u=\"1.5\" v=\"3.5\" z=\"0\"/><cornerLocal u=\"-1.5\" v=\"3.5\" z=\"0\"/></outline></object>"
+        "<object id=\"cw2\" type=\"Crosswalk\" s=\"10\" t=\"0\" zOffset=\"0\" hdg=\"0\" length=\"2\" width=\"6\"/></objects>"
         "<signals><signal id=\"stop1\" name=\"Stop\" s=\"45\" t=\"-4\" zOffset=\"0\" orientation=\"+\" dynamic=\"no\" "
         "country=\"DE\" type=\"206\" subtype=\"-1\" value=\"-1\" height=\"2\" width=\"0.6\"/>"
         "<signal id=\"speed_back\" name=\"Speed\" s=\"30\" t=\"4\" zOffset=\"2\" orientation=\"-\" dynamic=\"no\" "
@@ -47,7 +48,8 @@ const Map& Crossing() {
         "</geometry></planView><lanes><laneSection s=\"0\"><center><lane id=\"0\" type=\"none\"/></center><right>"
         "<lane id=\"-1\" type=\"driving\"><link><predecessor id=\"-1\"/></link>" + Width(3.5) +
         "</lane></right></laneSection></lanes><signals><signal id=\"speed50\" name=\"Speed\" s=\"5\" t=\"-4\" "
-        "orientation=\"+\" dynamic=\"no\" type=\"274\" subtype=\"-1\" value=\"50\" unit=\"km/h\"/></signals></road>\n";
+        "orientation=\"+\" dynamic=\"no\" type=\"274\" subtype=\"-1\" value=\"50\" unit=\"km/h\"/>"
+        "<signalReference id=\"stop1\" s=\"2\" t=\"-4\" orientation=\"+\"/></signals></road>\n";
     const std::string j =
         "<junction id=\"J\" name=\"J\"><connection id=\"0\" incomingRoad=\"in\" connectingRoad=\"c\" contactPoint=\"start\">"
         "<laneLink from=\"-1\" to=\"-1\"/></connection></junction>\n";
@@ -95,6 +97,12 @@ TEST(map_traffic, LandmarksAheadOnTheLane) {
   EXPECT_EQ(found[1].waypoint.road_id, "c");
   EXPECT_DOUBLE_EQ(found[1].value, 50);
   EXPECT_TRUE(m.LandmarksAhead(w, 30).empty());
+  // A <signalReference> repeats the stop sign on the connecting road at its own s.
+  found = m.LandmarksAhead(*m.WaypointXodr("c", -1, 0.5), 10);
+  ASSERT_EQ(found.size(), 2u);
+  EXPECT_EQ(found[0].id, "stop1");
+  EXPECT_NEAR(found[0].distance, 1.5, 1e-9);
+  EXPECT_EQ(found[0].road, m.RoadIndex("c"));
   ASSERT_EQ(m.LandmarksAhead(w, 100, /*stop_at_junction=*/true).size(), 1u);
   // The other direction sees only its own sign (orientation "-"), and not behind it.
   const Waypoint back = *m.WaypointXodr("in", 1, 40);
@@ -112,7 +120,13 @@ TEST(map_traffic, LandmarksAheadOnTheLane) {
 
 TEST(map_traffic, CrosswalkPolygons) {
   const auto zones = Crossing().Crosswalks();
-  ASSERT_EQ(zones.size(), 1u);
+  ASSERT_EQ(zones.size(), 2u);
+  // Without an outline: its length along the road by its width across.
+  ASSERT_EQ(zones[1].size(), 5u);
+  EXPECT_NEAR(zones[1][0].x(), 9.0, 1e-9);
+  EXPECT_NEAR(zones[1][0].y(), -3.0, 1e-9);
+  EXPECT_NEAR(zones[1][2].x(), 11.0, 1e-9);
+  EXPECT_NEAR(zones[1][2].y(), 3.0, 1e-9);
   ASSERT_EQ(zones[0].size(), 5u);
   EXPECT_EQ(zones[0].front(), zones[0].back());
   EXPECT_NEAR(zones[0][0].x(), 18.5, 1e-9);

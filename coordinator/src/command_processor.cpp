@@ -243,7 +243,7 @@ std::string CommandProcessor::Check(const msg::Command& cmd, bool synchronous) c
     // ground_sim's commands: the actor and finite values here, the rest in the service.
     case CommandKind::CMD_VEHICLE_ACKERMANN: {
       const auto& a = b.ackermann();
-      return First(CheckActor(a.actor(), ActorKind::kVehicle), InRange("steer", a.steer(), -3.2, 3.2),
+      return First(CheckActor(a.actor(), msg::ACTOR_VEHICLE), InRange("steer", a.steer(), -3.2, 3.2),
                    InRange("steer_speed", a.steer_speed(), 0, 100), InRange("speed", a.speed(), -100, 100),
                    InRange("acceleration", a.acceleration(), 0, 100), InRange("jerk", a.jerk(), 0, 1e4));
     }
@@ -251,7 +251,7 @@ std::string CommandProcessor::Check(const msg::Command& cmd, bool synchronous) c
       if (!actors_.count(b.actor_physics().actor())) return "unknown actor " + std::to_string(b.actor_physics().actor());
       return Finite(b.actor_physics().value()) ? std::string() : "physics command value has a NaN or infinite entry";
     case CommandKind::CMD_VEHICLE_PHYSICS:
-      return First(CheckActor(b.vehicle_physics().actor(), ActorKind::kVehicle),
+      return First(CheckActor(b.vehicle_physics().actor(), msg::ACTOR_VEHICLE),
                    InRange("mass", b.vehicle_physics().physics().mass(), 1, 1e5));
     case CommandKind::CMD_WALKER_AI:
       if (!actors_.count(b.walker_ai().actor())) return "unknown actor " + std::to_string(b.walker_ai().actor());

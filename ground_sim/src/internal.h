@@ -126,6 +126,16 @@ struct ExternalActor {
   dGeomID geom = nullptr;
 };
 
+// What the Traffic Manager sees of another actor at the start of a step.
+struct Obstacle {
+  uint32_t id = 0;
+  Vec3 position = Vec3::Zero();
+  Vec3 velocity = Vec3::Zero();
+  Eigen::Vector2d forward = Eigen::Vector2d(1, 0);
+  double half_x = 0, half_y = 0;
+  bool walker = false;
+};
+
 struct ContactRecord {
   uint32_t a = 0, b = 0;                 // actor ids (b = 0 for static)
   const GeomTag* ta = nullptr;
@@ -194,7 +204,8 @@ struct World::Impl {
 
   // traffic_manager.cpp
   void StepTrafficManager(double dt);
-  void TmVehicle(VehicleActor* v, double dt, std::map<int, std::vector<const VehicleActor*>>* junction_users);
+  void TmVehicle(VehicleActor* v, double dt, std::map<int, std::vector<const VehicleActor*>>* junction_users,
+                 const std::vector<Obstacle>& obstacles);
   void FillPath(VehicleActor* v);
   void MoveKinematic(VehicleActor* v, double dt);
   void AnchorPath(VehicleActor* v);

@@ -222,12 +222,28 @@ void World::Impl::StepTrafficManager(double dt) {
     if (v->tm.committed_junction >= 0 && v->tm.committed_junction != inside)
       junction_users[v->tm.committed_junction].push_back(v.get());
   }
+  // Where everything is at the start of the step: what the TM sees (decisions do not
+  // depend on the order vehicles are handled in, except junction commitments).
+  std::vector<Obstacle> obstacles;
+  obstacles.reserve(vehicles.size() + walkers.size());
+  for (const auto& [oid, o] : vehicles) {
+    const Pose op = BodyPose(o->body);
+    const double yaw = op.Yaw();
+    const Vec3 ov = o->kinematic ? Vec3(op.orientation * Vec3(o->tm.speed, 0, 0)) : ToVec(dBodyGetLinearVel(o->body));
+    obstacles.push_back(Obstacle{oid, op.position, ov, Eigen::Vector2d(std::cos(yaw), std::sin(yaw)), o->spec->half_extents.x(),
+                                 o->spec->half_extents.y(), false});
+  }
+  for (const auto& [wid, w] : walkers) {
+    const Pose wp = BodyPose(w->body);
+    obstacles.push_back(Obstacle{wid, wp.position, w->velocity, Eigen::Vector2d(1, 0), w->spec->radius, w->spec->radius, true});
+  }
   for (auto& [id, v] : vehicles) {
-    if (v->autopilot) TmVehicle(v.get(), dt, &junction_users);
+    if (v->autopilot) TmVehicle(v.get(), dt, &junction_users, obstacles);
   }
 }
 
-void World::Impl::TmVehicle(VehicleActor* v, double dt, std::map<int, std::vector<const VehicleActor*>>* junction_users) {
+void World::Impl::TmVehicle(VehicleActor* v, double dt, std::map<int, std::vector<const VehicleActor*>>* junction_users,
+                            const std::vector<Obstacle>& obstacles) {
   const map::Map& m = town->Map();
   TmState& s = v->tm;
   const auto& path = s.path;
@@ -334,41 +350,46 @@ void World::Impl::TmVehicle(VehicleActor* v, double dt, std::map<int, std::vecto
       break;
     }
 
-    // Leading vehicle or walker on the buffer ahead.
+    // Leading vehicle or walker on the buffer ahead (obstacles snapshot of this step).
     const double min_gap = Get(s.params.distance_to_leading_vehicle, tm.distance_to_leading_vehicle);
     const double reach = arc.back() + 10.0;
-    auto check = [&](const Vec3& opos, const Vec3& ovel, double o_half_x, double o_half_y, double oyaw, double ignore_pct) {
-      const Vec3 rel = opos - pose.position;
-      if (rel.head<2>().norm() > reach || std::abs(rel.z()) > 4.0) return;
-      for (size_t i = 0; i + 1 < path.size(); ++i) {
-        double t = 0;
-        const double d = SegmentDistance(opos.head<2>(), Loc(path[i]).head<2>(), Loc(path[i + 1]).head<2>(), &t);
-        const Vec3 dir = (Loc(path[i + 1]) - Loc(path[i])).normalized();
-        const double rel_yaw = oyaw - std::atan2(dir.y(), dir.x());
-        const double lateral = std::abs(std::sin(rel_yaw)) * o_half_x + std::abs(std::cos(rel_yaw)) * o_half_y;
-        if (d > half_y + lateral + 0.3) continue;
-        const double along = arc[i] + t * (arc[i + 1] - arc[i]);
-        if (along <= 0) return;  // beside or behind us
-        if (ignore_pct > 0 && s.rng.Percent(ignore_pct)) return;
-        const double extent = std::abs(std::cos(rel_yaw)) * o_half_x + std::abs(std::sin(rel_yaw)) * o_half_y;
-        const double gap = along - half_x - extent;
-        const double lead_speed = std::max(0.0, ovel.dot(dir));
-        const double room = gap - min_gap - 0.5 * speed;
-        target = std::min(target, room <= 0 ? 0.0 : std::sqrt(lead_speed * lead_speed + 2 * kComfortDecel * room));
-        return;
-      }
-    };
+    std::vector<Eigen::Vector2d> pts(path.size()), dirs(path.size() - 1);
+    Eigen::Vector2d lo(kInf, kInf), hi(-kInf, -kInf);
+    for (size_t i = 0; i < path.size(); ++i) {
+      pts[i] = Loc(path[i]).head<2>();
+      lo = lo.cwiseMin(pts[i]);
+      hi = hi.cwiseMax(pts[i]);
+    }
+    for (size_t i = 0; i + 1 < path.size(); ++i) {
+      const Eigen::Vector2d d = pts[i + 1] - pts[i];
+      dirs[i] = d.norm() > 1e-9 ? Eigen::Vector2d(d.normalized()) : Eigen::Vector2d(1, 0);
+    }
+    lo -= Eigen::Vector2d(8, 8);
+    hi += Eigen::Vector2d(8, 8);
     const double ignore_v = Get(s.params.ignore_vehicles_percentage, tm.ignore_vehicles_percentage);
     const double ignore_w = Get(s.params.ignore_walkers_percentage, tm.ignore_walkers_percentage);
-    for (const auto& [oid, o] : vehicles) {
-      if (o.get() == v) continue;
-      const Pose op = BodyPose(o->body);
-      const Vec3 ov = o->kinematic ? Vec3(op.orientation * Vec3(o->tm.speed, 0, 0)) : ToVec(dBodyGetLinearVel(o->body));
-      check(op.position, ov, o->spec->half_extents.x(), o->spec->half_extents.y(), op.Yaw(), ignore_v);
-    }
-    for (const auto& [wid, w] : walkers) {
-      const Pose wp = BodyPose(w->body);
-      check(wp.position, w->velocity, w->spec->radius, w->spec->radius, wp.Yaw(), ignore_w);
+    for (const Obstacle& o : obstacles) {
+      if (o.id == v->id) continue;
+      const Vec3 rel = o.position - pose.position;
+      if (std::abs(rel.x()) > reach || std::abs(rel.y()) > reach || std::abs(rel.z()) > 4.0) continue;
+      if (o.position.x() < lo.x() || o.position.y() < lo.y() || o.position.x() > hi.x() || o.position.y() > hi.y()) continue;
+      const double coarse = half_y + std::max(o.half_x, o.half_y) + 0.3;
+      for (size_t i = 0; i + 1 < path.size(); ++i) {
+        double t = 0;
+        const double d = SegmentDistance(o.position.head<2>(), pts[i], pts[i + 1], &t);
+        if (d > coarse) continue;
+        const double c = std::abs(dirs[i].dot(o.forward)), sn = std::abs(dirs[i].x() * o.forward.y() - dirs[i].y() * o.forward.x());
+        if (d > half_y + sn * o.half_x + c * o.half_y + 0.3) continue;
+        const double along = arc[i] + t * (arc[i + 1] - arc[i]);
+        if (along <= 0) break;  // beside or behind us
+        const double pct = o.walker ? ignore_w : ignore_v;
+        if (pct > 0 && s.rng.Percent(pct)) break;
+        const double gap = along - half_x - (c * o.half_x + sn * o.half_y);
+        const double lead_speed = std::max(0.0, o.velocity.head<2>().dot(dirs[i]));
+        const double room = gap - min_gap - 0.5 * speed;
+        target = std::min(target, room <= 0 ? 0.0 : std::sqrt(lead_speed * lead_speed + 2 * kComfortDecel * room));
+        break;
+      }
     }
     if (stop_at < kInf) target = std::min(target, stop_at <= 0.05 ? 0.0 : std::sqrt(2 * kComfortDecel * stop_at));
     s.target_speed = target;

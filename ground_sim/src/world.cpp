@@ -95,8 +95,14 @@ World::Impl::Impl(std::shared_ptr<const Town> t, uint64_t s, PhysicsSettings ps)
   dWorldSetQuickStepNumIterations(world, 20);
   dWorldSetAutoDisableFlag(world, 0);
   dWorldSetContactSurfaceLayer(world, 0.001);
-  static_space = dHashSpaceCreate(nullptr);
-  dHashSpaceSetLevels(static_space, 0, 8);
+  // A quadtree over the town: single-geom queries (wheel rays, walkers) visit only the
+  // cells they touch (a hash space's collide2 tests every static geom).
+  {
+    const auto lo = town->Map().BoundsMin(), hi = town->Map().BoundsMax();
+    const dVector3 centre = {(lo.x() + hi.x()) / 2, (lo.y() + hi.y()) / 2, 0, 0};
+    const dVector3 extents = {(hi.x() - lo.x()) / 2 + 100, (hi.y() - lo.y()) / 2 + 100, 200, 0};
+    static_space = dQuadTreeSpaceCreate(nullptr, centre, extents, 6);
+  }
   actor_space = dHashSpaceCreate(nullptr);
   dHashSpaceSetLevels(actor_space, -1, 5);
   contacts = dJointGroupCreate(0);
@@ -258,7 +264,11 @@ void World::Impl::Collide(bool) {
   contact_buffer.clear();
   CollideContext ctx{this};
   dSpaceCollide(actor_space, &ctx, &NearCallback);
-  dSpaceCollide2(reinterpret_cast<dGeomID>(actor_space), reinterpret_cast<dGeomID>(static_space), &ctx, &NearCallback);
+  // Against the town only vehicles with physics: kinematic ones follow lanes, walkers are
+  // kept off walls by their own step (one query per dynamic vehicle, not per actor).
+  for (auto& [id, v] : vehicles) {
+    if (!v->kinematic && v->simulate_physics) dSpaceCollide2(v->geom, reinterpret_cast<dGeomID>(static_space), &ctx, &NearCallback);
+  }
   // Deterministic order whatever the spaces' internal lists look like (a restored world
   // builds them in another order): the solver's result depends on the joint order.
   std::sort(contact_buffer.begin(), contact_buffer.end(), [](const ContactRecord& x, const ContactRecord& y) {

@@ -13,9 +13,9 @@ namespace {
 constexpr double kSpacing = 2.0;           // m between path points
 constexpr double kComfortDecel = 3.0;      // m/s^2 for planned stops
 constexpr double kYellowDecel = 4.0;       // m/s^2: stop on yellow if this suffices
-constexpr double kMaxAccel = 2.5;          // m/s^2, kinematic mode
+constexpr double kMaxAccel = 3.5;          // m/s^2, kinematic mode
 constexpr double kMaxDecel = 8.0;          // m/s^2, kinematic mode
-constexpr double kMaxLateralAccel = 3.0;   // m/s^2 in curves
+constexpr double kMaxLateralAccel = 4.0;   // m/s^2 in curves
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 double Get(double per_vehicle, double global) { return std::isnan(per_vehicle) ? global : per_vehicle; }

@@ -139,7 +139,7 @@ ScheduledCommand LoadStep(YamlMap m, uint64_t index) {
     m.Get("yaw", &yaw);
     std::map<std::string, std::string> attrs;
     m.Get("attributes", &attrs);
-    m.Get("parent", &s.actor_alias);  // attach to this actor (e.g. controller.ai.walker to its walker)
+    m.Get("parent", &s.actor_alias);  // attach to this actor (by alias): `at` and `yaw` are then relative to it
     body = SpawnBody(spawn, MakePose(at.x(), at.y(), at.z(), yaw), AttributeList(attrs.begin(), attrs.end()));
   } else if (m.Get("autopilot", &autopilot)) {
     m.Require("actor", &s.actor_alias);

@@ -944,6 +944,10 @@ const char* CommandKindName(msg::CommandKind kind) {
     case msg::CommandKind::CMD_LOAD_MAP: return "load_world";
     case msg::CommandKind::CMD_RESET: return "reload_world";
     case msg::CommandKind::CMD_TICK: return "tick";
+    case msg::CommandKind::CMD_VEHICLE_ACKERMANN: return "apply_ackermann_control";
+    case msg::CommandKind::CMD_ACTOR_PHYSICS: return "actor physics command";
+    case msg::CommandKind::CMD_VEHICLE_PHYSICS: return "apply_physics_control";
+    case msg::CommandKind::CMD_WALKER_AI: return "walker AI controller command";
   }
   return "command";
 }

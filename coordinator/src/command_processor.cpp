@@ -190,6 +190,21 @@ std::string CommandProcessor::Check(const msg::Command& cmd, bool synchronous) c
         case P::TM_AUTO_LANE_CHANGE: return InRange("auto_lane_change", t.value(), 0, 1);
         case P::TM_HYBRID_PHYSICS_RADIUS: return InRange("radius", t.value(), 0, 10000);
         case P::TM_RANDOM_SEED: return InRange("seed", t.value(), 0, 4294967295.0);
+        case P::TM_DESIRED_SPEED: return InRange("desired speed", t.value(), 0, 100);
+        case P::TM_KEEP_RIGHT_RULE_PERCENTAGE:
+        case P::TM_RANDOM_LEFT_LANECHANGE_PERCENTAGE:
+        case P::TM_RANDOM_RIGHT_LANECHANGE_PERCENTAGE: return InRange("percentage", t.value(), 0, 100);
+        case P::TM_FORCE_LANE_CHANGE:
+        case P::TM_SET_PATH:
+        case P::TM_SET_ROUTE:
+          if (t.actor() == 0) return "this traffic manager call needs a vehicle actor";
+          for (const auto& p : t.path()) {
+            if (!Finite(p)) return "set_path has a NaN or infinite location";
+          }
+          return {};
+        case P::TM_HYBRID_PHYSICS_MODE:
+        case P::TM_SYNCHRONOUS_MODE:
+        case P::TM_RESPAWN_DORMANT_VEHICLES: return InRange("flag", t.value(), 0, 1);
       }
       return "unknown traffic manager parameter";
     }
@@ -225,6 +240,23 @@ std::string CommandProcessor::Check(const msg::Command& cmd, bool synchronous) c
     case CommandKind::CMD_TICK:
       if (!synchronous) return "tick requests need synchronous_mode; the world is free-running";
       return InRange("tick count", b.tick_request().count(), 1, 1e6);
+    // ground_sim's commands: the actor and finite values here, the rest in the service.
+    case CommandKind::CMD_VEHICLE_ACKERMANN: {
+      const auto& a = b.ackermann();
+      return First(CheckActor(a.actor(), msg::ACTOR_VEHICLE), InRange("steer", a.steer(), -3.2, 3.2),
+                   InRange("steer_speed", a.steer_speed(), 0, 100), InRange("speed", a.speed(), -100, 100),
+                   InRange("acceleration", a.acceleration(), 0, 100), InRange("jerk", a.jerk(), 0, 1e4));
+    }
+    case CommandKind::CMD_ACTOR_PHYSICS:
+      if (!actors_.count(b.actor_physics().actor())) return "unknown actor " + std::to_string(b.actor_physics().actor());
+      return Finite(b.actor_physics().value()) ? std::string() : "physics command value has a NaN or infinite entry";
+    case CommandKind::CMD_VEHICLE_PHYSICS:
+      return First(CheckActor(b.vehicle_physics().actor(), msg::ACTOR_VEHICLE),
+                   InRange("mass", b.vehicle_physics().physics().mass(), 1, 1e5));
+    case CommandKind::CMD_WALKER_AI:
+      if (!actors_.count(b.walker_ai().actor())) return "unknown actor " + std::to_string(b.walker_ai().actor());
+      return First(Finite(b.walker_ai().location()) ? std::string() : "go_to_location has a NaN or infinite value",
+                   InRange("max_speed", b.walker_ai().max_speed(), 0, 10));
   }
   return "unknown command kind";
 }

@@ -512,6 +512,8 @@ struct Coordinator::Impl {
           continue;
         }
         if (c.body()._d() == msg::CommandKind::CMD_DRONE) c.body().drone().actor(it->second);
+        if (c.body()._d() == msg::CommandKind::CMD_TRAFFIC_MANAGER) c.body().traffic_manager().actor(it->second);
+        if (c.body()._d() == msg::CommandKind::CMD_WALKER_AI) c.body().walker_ai().actor(it->second);
         if (c.body()._d() == msg::CommandKind::CMD_SPAWN_ACTOR) c.body().spawn_actor().parent(it->second);
       }
       SyncLibrary();

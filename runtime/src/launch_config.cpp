@@ -120,14 +120,16 @@ msg::DroneCommandKind DroneKind(YamlMap& m, const std::string& name) {
   return it->second;
 }
 
-// One scenario step: {frame, spawn, as, at, yaw, attributes, parent} or {frame, actor, drone, ...}.
+// One scenario step: {frame, spawn, as, at, yaw, attributes, parent}, {frame, actor, drone, ...},
+// {frame, actor, autopilot: true|false} (Traffic Manager) or {frame, actor, walker_ai: start|stop}.
 ScheduledCommand LoadStep(YamlMap m, uint64_t index) {
   ScheduledCommand s;
   s.command.client("scenario");
   s.command.sequence_number(index + 1);
   m.Require("frame", &s.frame);
   if (s.frame < 1) m.Fail(m.Child("frame"), "frame", "must be >= 1");
-  std::string spawn, drone;
+  std::string spawn, drone, walker_ai;
+  bool autopilot = false;
   msg::CommandBody body;
   if (m.Get("spawn", &spawn)) {
     m.Require("as", &s.alias);
@@ -148,6 +150,18 @@ ScheduledCommand LoadStep(YamlMap m, uint64_t index) {
       pose.orientation().z(sy * cp);
     }
     body = SpawnBody(spawn, pose, AttributeList(attrs.begin(), attrs.end()));
+  } else if (m.Get("autopilot", &autopilot)) {
+    m.Require("actor", &s.actor_alias);
+    msg::TrafficManagerCommand tm;
+    tm.parameter(msg::TrafficManagerParameter::TM_AUTOPILOT);
+    tm.value(autopilot ? 1 : 0);
+    body.traffic_manager(tm);
+  } else if (m.Get("walker_ai", &walker_ai)) {
+    m.Require("actor", &s.actor_alias);
+    if (walker_ai != "start" && walker_ai != "stop") m.Fail(m.Child("walker_ai"), "walker_ai", "must be start or stop");
+    msg::WalkerAICommand w;
+    w.kind(walker_ai == "start" ? msg::WalkerAIKind::WALKER_AI_START : msg::WalkerAIKind::WALKER_AI_STOP);
+    body.walker_ai(w);
   } else if (m.Get("drone", &drone)) {
     msg::DroneCommand d;
     m.Require("actor", &s.actor_alias);
@@ -176,7 +190,7 @@ ScheduledCommand LoadStep(YamlMap m, uint64_t index) {
     d.yaw(y);
     body.drone(d);
   } else {
-    m.Fail(m.Child("frame"), "spawn", "or 'drone' is required in a scenario step");
+    m.Fail(m.Child("frame"), "spawn", "or 'drone', 'autopilot', 'walker_ai' is required in a scenario step");
   }
   s.command.body(body);
   m.Finish();

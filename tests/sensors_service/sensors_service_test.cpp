@@ -285,13 +285,20 @@ TEST(SensorsEvents, CollisionAndLaneInvasionStreamsFromPhysicsEvents) {
   std::mutex mu;
   std::vector<msg::CollisionEvent> collisions;
   std::vector<msg::LaneInvasionEvent> invasions;
+  std::condition_variable cv;
   Reader<msg::CollisionEvent> cr(*bus, topics::kCollision, [&](const msg::CollisionEvent& e, const SampleInfo&) {
-    std::lock_guard<std::mutex> lock(mu);
-    collisions.push_back(e);
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      collisions.push_back(e);
+    }
+    cv.notify_all();
   });
   Reader<msg::LaneInvasionEvent> lr(*bus, topics::kLaneInvasion, [&](const msg::LaneInvasionEvent& e, const SampleInfo&) {
-    std::lock_guard<std::mutex> lock(mu);
-    invasions.push_back(e);
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      invasions.push_back(e);
+    }
+    cv.notify_all();
   });
   Writer<msg::BlueprintSet> sets(*bus, topics::kBlueprints);
   Writer<msg::GroundState> ground(*bus, topics::kGroundState);
@@ -370,7 +377,9 @@ TEST(SensorsEvents, CollisionAndLaneInvasionStreamsFromPhysicsEvents) {
     }
     service.Step(tick);
   }
-  std::lock_guard<std::mutex> lock(mu);
+  std::unique_lock<std::mutex> lock(mu);
+  // Delivery to this test's readers may lag the Step that wrote them.
+  cv.wait_for(lock, 10s, [&] { return !collisions.empty() && !invasions.empty(); });
   ASSERT_EQ(collisions.size(), 1u);
   EXPECT_EQ(collisions[0].sensor(), 100u);
   EXPECT_EQ(collisions[0].stamp().frame(), 2u);

@@ -1,0 +1,52 @@
+#pragma once
+// The immutable part of a ground world: the road network, its static meshes (collision),
+// the traffic lights with the lanes they govern, and spawn points. Shared by worlds.
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <string>
+#include <tuple>
+#include <vector>
+
+#include "lockstep/map/map.h"
+#include "lockstep/map/mesh.h"
+#include "lockstep/map/scene.h"
+
+namespace lockstep::ground {
+
+struct TownLight {
+  map::TrafficLightInfo info;
+  int group = 0;                      // lights of one junction cycle together
+};
+
+class Town {
+ public:
+  // meshes: the static collision (map::BuildWorldMeshes or hand-made for tests).
+  Town(map::Map map, std::vector<map::Mesh> meshes);
+  // The map's roads and a scene (buildings, poles, ...) as the other services build them.
+  static std::shared_ptr<const Town> Build(map::Map map, const map::Scene& scene);
+  static std::shared_ptr<const Town> Load(const std::string& xodr_path, uint64_t scene_seed);
+
+  const map::Map& Map() const { return map_; }
+  const std::vector<map::Mesh>& Meshes() const { return meshes_; }
+  // In the coordinator's order: light i is actor i + 1.
+  const std::vector<TownLight>& Lights() const { return lights_; }
+  int GroupCount() const { return group_count_; }
+  // Index of the light governing the lane (road, section, lane) at its exit, or -1.
+  int LightOfLane(int road, int section, int lane) const;
+  const std::vector<map::Transform>& SpawnPoints() const { return spawn_points_; }
+  const std::vector<map::Transform>& WalkerSpawnPoints() const { return walker_spawn_points_; }
+  uint64_t Hash() const { return hash_; }
+
+ private:
+  map::Map map_;
+  std::vector<map::Mesh> meshes_;
+  std::vector<TownLight> lights_;
+  int group_count_ = 0;
+  std::map<std::tuple<int, int, int>, int> lane_light_;
+  std::vector<map::Transform> spawn_points_;
+  std::vector<map::Transform> walker_spawn_points_;
+  uint64_t hash_ = 0;
+};
+
+}  // namespace lockstep::ground

@@ -1,0 +1,192 @@
+#pragma once
+// The ground world: vehicles (ODE rigid bodies on ray-cast suspension, or kinematic far
+// from the hero), walkers (kinematic capsules), traffic lights and the Traffic Manager,
+// stepped deterministically. No DDS: the service maps wire commands onto these calls.
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "lockstep/ground/blueprints.h"
+#include "lockstep/ground/town.h"
+#include "lockstep/ground/traffic.h"
+#include "lockstep/ground/types.h"
+#include "lockstep/map/lane_invasion.h"
+
+namespace lockstep::ground {
+
+// CARLA's world settings for physics sub-stepping.
+struct PhysicsSettings {
+  bool substepping = true;
+  double max_substep_delta_time = 0.01;  // s
+  int max_substeps = 10;
+};
+
+// A collision of one actor during the last step (one per actor and other object).
+struct Collision {
+  uint32_t actor = 0;
+  uint32_t other_actor = 0;       // 0 for static geometry
+  ObjectKind other_kind = ObjectKind::kNone;
+  uint8_t other_semantic_tag = 0; // CARLA palette id of the other object
+  Vec3 normal_impulse = Vec3::Zero();  // N s on `actor`, world
+};
+
+struct LaneInvasion {
+  uint32_t actor = 0;
+  std::vector<map::LaneMarking> crossed;
+};
+
+// Infractions the 2017 benchmark and the leaderboard count, per vehicle, cumulative.
+struct Infractions {
+  int red_lights = 0;             // entered a junction from a lane whose light was red
+  int vehicle_collisions = 0;
+  int walker_collisions = 0;
+  int static_collisions = 0;
+  int lane_invasions = 0;
+};
+
+struct VehicleView {
+  uint32_t id = 0;
+  std::string blueprint;
+  std::string role_name;
+  Pose pose;                      // bounding-box centre
+  Vec3 half_extents = Vec3::Zero();
+  Vec3 velocity = Vec3::Zero();
+  Vec3 angular_velocity = Vec3::Zero();
+  Vec3 acceleration = Vec3::Zero();
+  VehicleControl control;         // last applied (the TM's when on autopilot)
+  bool autopilot = false;
+  bool kinematic = false;         // hybrid mode or simulate_physics off
+  double speed_limit = 0;         // m/s
+  uint32_t traffic_light = 0;     // actor id of the light ahead governing it, 0 = none
+  double stop_line_distance = -1; // m to that light's stop line, -1 = none
+  double opposite_lane = 0;       // fraction of the footprint on the opposite lane
+  double sidewalk = 0;            // fraction on the sidewalk
+  uint32_t light_state = 0;       // carla.VehicleLightState bits
+  int gear = 0;
+  Infractions infractions;
+};
+
+struct WalkerView {
+  uint32_t id = 0;
+  std::string blueprint;
+  Pose pose;                      // capsule centre
+  Vec3 half_extents = Vec3::Zero();
+  Vec3 velocity = Vec3::Zero();
+  bool ai_controlled = false;
+  WalkerControl control;
+};
+
+struct LightView {
+  uint32_t id = 0;                // actor id (light index + 1)
+  map::Transform pose;
+  LightState state;
+  std::string opendrive_id;
+};
+
+// Another simulator's body (a drone from air_sim, Jacobi: its pose of the previous frame).
+struct ExternalBody {
+  uint32_t id = 0;
+  ObjectKind kind = ObjectKind::kDrone;
+  Pose pose;
+  Vec3 velocity = Vec3::Zero();
+  Vec3 half_extents = Vec3(0.3, 0.3, 0.1);
+  double mass = 1.0;              // kg
+};
+
+class World {
+ public:
+  World(std::shared_ptr<const Town> town, uint64_t seed, PhysicsSettings settings = {});
+  ~World();
+  World(const World&) = delete;
+  World& operator=(const World&) = delete;
+
+  const Town& town() const;
+  uint64_t seed() const;
+  uint64_t frame() const;         // steps taken
+  void SetPhysicsSettings(const PhysicsSettings& s);
+
+  // Actors. Each returns "" on success, else why not (nothing changes then).
+  std::string AddVehicle(uint32_t id, const std::string& blueprint, const std::map<std::string, std::string>& attributes,
+                         const Pose& pose);
+  std::string AddWalker(uint32_t id, const std::string& blueprint, const std::map<std::string, std::string>& attributes,
+                        const Pose& pose);
+  std::string AddWalkerController(uint32_t id, uint32_t walker);
+  // CARLA's try_spawn_actor: "" if the box at `pose` is free of vehicles and walkers.
+  std::string CheckFree(const Pose& pose, const Vec3& half_extents) const;
+  bool Remove(uint32_t id);
+  bool Has(uint32_t id) const;
+  bool IsVehicle(uint32_t id) const;
+  bool IsWalker(uint32_t id) const;
+  bool IsController(uint32_t id) const;
+
+  std::string SetTransform(uint32_t id, const Pose& pose);
+  std::string ApplyControl(uint32_t id, const VehicleControl& c);
+  std::string ApplyAckermann(uint32_t id, const AckermannControl& c);
+  std::string ApplyWalkerControl(uint32_t id, const WalkerControl& c);
+  std::string SetTargetVelocity(uint32_t id, const Vec3& v);
+  std::string SetTargetAngularVelocity(uint32_t id, const Vec3& w);
+  std::string AddImpulse(uint32_t id, const Vec3& impulse);
+  std::string SetSimulatePhysics(uint32_t id, bool on);
+  std::string SetVehiclePhysics(uint32_t id, const VehiclePhysics& p);
+  std::optional<VehiclePhysics> GetVehiclePhysics(uint32_t id) const;
+  std::string SetLightState(uint32_t vehicle, uint32_t bits);
+
+  // Traffic lights by actor id (1..n).
+  std::string SetTrafficLight(uint32_t id, std::optional<LightColor> color, double green, double yellow, double red,
+                              std::optional<bool> freeze);
+  void FreezeAllLights(bool freeze);
+
+  // Traffic Manager.
+  std::string SetAutopilot(uint32_t vehicle, bool on);
+  std::string SetTrafficManager(TmParam p, uint32_t vehicle, double value);  // vehicle 0 = global
+  std::string SetPath(uint32_t vehicle, const std::vector<Vec3>& locations);
+  std::string SetRoute(uint32_t vehicle, const std::vector<std::string>& options);  // Left/Right/Straight
+  std::string ForceLaneChange(uint32_t vehicle, bool left);
+  const TmGlobal& TrafficManager() const;
+
+  // Walker AI controllers (controller.ai.walker) by controller id.
+  std::string ControllerStart(uint32_t controller);
+  std::string ControllerStop(uint32_t controller);
+  std::string ControllerGoTo(uint32_t controller, const Vec3& location);
+  std::string ControllerMaxSpeed(uint32_t controller, double speed);
+
+  // Bodies of other simulators for this step (replaces the previous set).
+  void SetExternalBodies(std::vector<ExternalBody> bodies);
+
+  // Advances by dt (s): TM and walker AI, lights, physics sub-steps, events.
+  void Step(double dt);
+
+  // After a step.
+  const std::vector<Collision>& Collisions() const;
+  const std::vector<LaneInvasion>& LaneInvasions() const;
+  std::vector<VehicleView> Vehicles() const;
+  std::vector<WalkerView> Walkers() const;
+  std::vector<LightView> Lights() const;
+  std::optional<VehicleView> Vehicle(uint32_t id) const;
+  std::optional<WalkerView> Walker(uint32_t id) const;
+
+  uint64_t StateHash() const;
+  std::vector<uint8_t> Save() const;
+  // Rebuilds a world saved by Save() on the same town; throws std::runtime_error if the
+  // bytes are not a ground state of this town.
+  static std::unique_ptr<World> Restore(std::shared_ptr<const Town> town, const std::vector<uint8_t>& bytes);
+
+  struct Impl;
+
+ private:
+  std::unique_ptr<Impl> impl_;
+};
+
+// Seeded population (CARLA's generate_traffic.py): vehicles at shuffled spawn points on
+// autopilot, walkers at pedestrian spawn points with AI controllers. Ids from first_id.
+struct PopulationReport {
+  std::vector<uint32_t> vehicles, walkers, controllers;
+  int vehicle_failures = 0;      // spawn point occupied (try_spawn_actor returned None)
+};
+PopulationReport Populate(World* world, int vehicles, int walkers, uint64_t seed, uint32_t first_id,
+                          const std::vector<std::string>& vehicle_blueprints = {});
+
+}  // namespace lockstep::ground

@@ -1,0 +1,58 @@
+#pragma once
+// The ground_sim service core: maps the tick's commands onto ground::World calls, steps it,
+// and publishes GroundState and PhysicsEvents (every tick) stamped with the frame.
+#include <condition_variable>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+
+#include "lockstep/ground/world.h"
+#include "lockstep/runtime/frame_buffer.h"
+#include "lockstep/runtime/service.h"
+
+namespace lockstep {
+
+class GroundService final : public ServiceCore {
+ public:
+  explicit GroundService(Bus& bus, std::string name = "ground_sim");
+  void BeginRun(const msg::WorldInfo& world) override;
+  void Step(const msg::Tick& tick) override;
+  std::vector<msg::BlueprintDeclaration> Blueprints() const override;
+  std::string CheckSpawn(const msg::SpawnActor& spawn) const override;
+  uint64_t StateHash() const override { return world_ ? world_->StateHash() : 0; }
+  std::vector<uint8_t> SaveState() const override;
+  void RestoreState(const std::vector<uint8_t>& state) override;
+  // With an air_sim in the run the step waits for the drones of frame k-1.
+  bool StepNeverWaits() const override { return !wait_for_air_; }
+
+  const ground::World* world() const { return world_.get(); }
+
+ private:
+  void Apply(const msg::Command& c);
+  void Spawn(const msg::SpawnActor& s);
+  void Fail(uint32_t actor, const std::string& why);
+  void LoadTown(const msg::WorldInfo& world);
+  void ExternalBodies(const msg::Tick& tick);
+  msg::GroundState PublishState(const msg::FrameStamp& stamp) const;
+  msg::PhysicsEvents PublishEvents(const msg::FrameStamp& stamp) const;
+
+  std::string name_;
+  Writer<msg::GroundState> state_writer_;
+  Writer<msg::PhysicsEvents> events_writer_;
+  Writer<msg::SimEvent> event_writer_;
+  FrameBuffer<msg::AirState> air_;
+  std::mutex map_mu_;
+  std::condition_variable map_cv_;
+  std::optional<msg::MapData> map_;
+  uint64_t town_hash_ = 0;
+  std::shared_ptr<const ground::Town> town_;
+  std::unique_ptr<ground::World> world_;
+  ground::PhysicsSettings physics_;
+  uint64_t seed_ = 0;
+  bool wait_for_air_ = false;
+  std::vector<msg::SimEvent> pending_events_;
+  Reader<msg::MapData> map_reader_;  // last: its callback uses the members above
+};
+
+}  // namespace lockstep

@@ -1,0 +1,230 @@
+#include "wire.h"
+
+#include "lockstep/runtime/blueprint_builder.h"
+
+namespace lockstep::ground_wire {
+
+ground::Vec3 ToVec(const msg::Vector3& v) { return {v.x(), v.y(), v.z()}; }
+msg::Vector3 FromVec(const ground::Vec3& v) {
+  msg::Vector3 m;
+  m.x(v.x());
+  m.y(v.y());
+  m.z(v.z());
+  return m;
+}
+ground::Pose ToPose(const msg::Pose& p) {
+  ground::Pose out;
+  out.position = ToVec(p.position());
+  out.orientation = ground::Quat(p.orientation().w(), p.orientation().x(), p.orientation().y(), p.orientation().z()).normalized();
+  return out;
+}
+msg::Pose FromPose(const ground::Pose& p) {
+  msg::Pose out;
+  out.position(FromVec(p.position));
+  out.orientation().w(p.orientation.w());
+  out.orientation().x(p.orientation.x());
+  out.orientation().y(p.orientation.y());
+  out.orientation().z(p.orientation.z());
+  return out;
+}
+
+msg::VehiclePhysicsControl ToWire(const ground::VehiclePhysics& p) {
+  msg::VehiclePhysicsControl m;
+  for (auto [rpm, nm] : p.torque_curve) {
+    msg::CurvePoint c;
+    c.x(rpm);
+    c.y(nm);
+    m.torque_curve().push_back(c);
+  }
+  m.max_rpm(p.max_rpm);
+  m.moi(p.moi);
+  m.damping_rate_full_throttle(p.damping_rate_full_throttle);
+  m.use_gear_autobox(p.use_gear_autobox);
+  m.gear_switch_time(p.gear_switch_time);
+  m.clutch_strength(p.clutch_strength);
+  m.final_ratio(p.final_ratio);
+  for (const auto& g : p.forward_gears) {
+    msg::GearPhysicsControl w;
+    w.ratio(g.ratio);
+    w.down_ratio(g.down_ratio);
+    w.up_ratio(g.up_ratio);
+    m.forward_gears().push_back(w);
+  }
+  m.mass(p.mass);
+  m.drag_coefficient(p.drag_coefficient);
+  m.center_of_mass(FromVec(p.center_of_mass));
+  m.tire_friction(p.tire_friction);
+  m.wheel_radius(p.wheel_radius);
+  m.max_steer_angle(p.max_steer_angle);
+  m.max_brake_torque(p.max_brake_torque);
+  m.max_handbrake_torque(p.max_handbrake_torque);
+  m.suspension_stiffness(p.suspension_stiffness);
+  m.suspension_damping(p.suspension_damping);
+  m.wheelbase(p.wheelbase);
+  m.track(p.track);
+  return m;
+}
+
+ground::VehiclePhysics FromWire(const msg::VehiclePhysicsControl& m) {
+  ground::VehiclePhysics p;
+  for (const auto& c : m.torque_curve()) p.torque_curve.emplace_back(c.x(), c.y());
+  p.max_rpm = m.max_rpm();
+  p.moi = m.moi();
+  p.damping_rate_full_throttle = m.damping_rate_full_throttle();
+  p.use_gear_autobox = m.use_gear_autobox();
+  p.gear_switch_time = m.gear_switch_time();
+  p.clutch_strength = m.clutch_strength();
+  p.final_ratio = m.final_ratio();
+  for (const auto& g : m.forward_gears()) p.forward_gears.push_back(ground::GearSpec{g.ratio(), g.down_ratio(), g.up_ratio()});
+  p.mass = m.mass();
+  p.drag_coefficient = m.drag_coefficient();
+  p.center_of_mass = ToVec(m.center_of_mass());
+  p.tire_friction = m.tire_friction();
+  p.wheel_radius = m.wheel_radius();
+  p.max_steer_angle = m.max_steer_angle();
+  p.max_brake_torque = m.max_brake_torque();
+  p.max_handbrake_torque = m.max_handbrake_torque();
+  p.suspension_stiffness = m.suspension_stiffness();
+  p.suspension_damping = m.suspension_damping();
+  p.wheelbase = m.wheelbase();
+  p.track = m.track();
+  return p;
+}
+
+msg::LaneMarking ToWire(const map::LaneMarking& m) {
+  using T = map::RoadMarkType;
+  using W = msg::LaneMarkingType;
+  msg::LaneMarking out;
+  switch (m.type) {
+    case T::None: out.type(W::MARKING_NONE); break;
+    case T::Solid: out.type(W::MARKING_SOLID); break;
+    case T::Broken: out.type(W::MARKING_BROKEN); break;
+    case T::SolidSolid: out.type(W::MARKING_SOLID_SOLID); break;
+    case T::SolidBroken: out.type(W::MARKING_SOLID_BROKEN); break;
+    case T::BrokenSolid: out.type(W::MARKING_BROKEN_SOLID); break;
+    case T::BrokenBroken: out.type(W::MARKING_BROKEN_BROKEN); break;
+    case T::BottsDots: out.type(W::MARKING_BOTTS_DOTS); break;
+    case T::Grass: out.type(W::MARKING_GRASS); break;
+    case T::Curb: out.type(W::MARKING_CURB); break;
+    default: out.type(W::MARKING_OTHER); break;
+  }
+  const char* color = "white";
+  switch (m.color) {
+    case map::RoadMarkColor::Yellow: color = "yellow"; break;
+    case map::RoadMarkColor::Blue: color = "blue"; break;
+    case map::RoadMarkColor::Green: color = "green"; break;
+    case map::RoadMarkColor::Red: color = "red"; break;
+    case map::RoadMarkColor::Orange: color = "orange"; break;
+    default: break;
+  }
+  out.color(color);
+  out.width(static_cast<float>(m.width));
+  out.lane_change_left(m.lane_change == map::LaneChange::Left || m.lane_change == map::LaneChange::Both);
+  out.lane_change_right(m.lane_change == map::LaneChange::Right || m.lane_change == map::LaneChange::Both);
+  return out;
+}
+
+msg::ObjectKind ToWire(ground::ObjectKind k) {
+  switch (k) {
+    case ground::ObjectKind::kNone: return msg::ObjectKind::OBJECT_NONE;
+    case ground::ObjectKind::kGround: return msg::ObjectKind::OBJECT_GROUND;
+    case ground::ObjectKind::kStatic: return msg::ObjectKind::OBJECT_STATIC;
+    case ground::ObjectKind::kVehicle: return msg::ObjectKind::OBJECT_VEHICLE;
+    case ground::ObjectKind::kWalker: return msg::ObjectKind::OBJECT_WALKER;
+    case ground::ObjectKind::kDrone: return msg::ObjectKind::OBJECT_DRONE;
+  }
+  return msg::ObjectKind::OBJECT_NONE;
+}
+
+msg::TrafficLightColor ToWire(ground::LightColor c) {
+  switch (c) {
+    case ground::LightColor::kRed: return msg::TrafficLightColor::LIGHT_RED;
+    case ground::LightColor::kYellow: return msg::TrafficLightColor::LIGHT_YELLOW;
+    case ground::LightColor::kGreen: return msg::TrafficLightColor::LIGHT_GREEN;
+    case ground::LightColor::kOff: return msg::TrafficLightColor::LIGHT_OFF;
+    case ground::LightColor::kUnknown: return msg::TrafficLightColor::LIGHT_UNKNOWN;
+  }
+  return msg::TrafficLightColor::LIGHT_UNKNOWN;
+}
+
+std::optional<ground::LightColor> FromWire(msg::TrafficLightColor c) {
+  switch (c) {
+    case msg::TrafficLightColor::LIGHT_RED: return ground::LightColor::kRed;
+    case msg::TrafficLightColor::LIGHT_YELLOW: return ground::LightColor::kYellow;
+    case msg::TrafficLightColor::LIGHT_GREEN: return ground::LightColor::kGreen;
+    case msg::TrafficLightColor::LIGHT_OFF: return ground::LightColor::kOff;
+    case msg::TrafficLightColor::LIGHT_UNKNOWN: return std::nullopt;  // unchanged
+  }
+  return std::nullopt;
+}
+
+std::optional<ground::TmParam> FromWire(msg::TrafficManagerParameter p) {
+  using P = msg::TrafficManagerParameter;
+  using G = ground::TmParam;
+  switch (p) {
+    case P::TM_DISTANCE_TO_LEADING_VEHICLE: return G::kDistanceToLeadingVehicle;
+    case P::TM_PERCENTAGE_SPEED_DIFFERENCE: return G::kPercentageSpeedDifference;
+    case P::TM_IGNORE_LIGHTS_PERCENTAGE: return G::kIgnoreLightsPercentage;
+    case P::TM_IGNORE_SIGNS_PERCENTAGE: return G::kIgnoreSignsPercentage;
+    case P::TM_IGNORE_VEHICLES_PERCENTAGE: return G::kIgnoreVehiclesPercentage;
+    case P::TM_IGNORE_WALKERS_PERCENTAGE: return G::kIgnoreWalkersPercentage;
+    case P::TM_AUTO_LANE_CHANGE: return G::kAutoLaneChange;
+    case P::TM_HYBRID_PHYSICS_RADIUS: return G::kHybridPhysicsRadius;
+    case P::TM_RANDOM_SEED: return G::kRandomSeed;
+    case P::TM_DESIRED_SPEED: return G::kDesiredSpeed;
+    case P::TM_KEEP_RIGHT_RULE_PERCENTAGE: return G::kKeepRightPercentage;
+    case P::TM_RANDOM_LEFT_LANECHANGE_PERCENTAGE: return G::kRandomLeftLaneChangePercentage;
+    case P::TM_RANDOM_RIGHT_LANECHANGE_PERCENTAGE: return G::kRandomRightLaneChangePercentage;
+    case P::TM_HYBRID_PHYSICS_MODE: return G::kHybridPhysicsMode;
+    case P::TM_SYNCHRONOUS_MODE: return G::kSynchronousMode;
+    case P::TM_RESPAWN_DORMANT_VEHICLES: return G::kRespawnDormantVehicles;
+    default: return std::nullopt;  // autopilot, set_path, set_route, force_lane_change: own calls
+  }
+}
+
+std::vector<msg::BlueprintDeclaration> Blueprints() {
+  namespace bp = blueprint;
+  std::vector<msg::BlueprintDeclaration> out;
+  for (const auto& v : ground::VehicleCatalog()) {
+    std::vector<msg::AttributeDeclaration> attrs = {
+        bp::String("role_name", "autopilot", {"autopilot", "scenario", "ego_vehicle", "hero"}),
+        bp::Bool("sticky_control", true),
+        bp::Bool("terramechanics", false),
+        bp::Int("number_of_wheels", v.wheels, v.wheels, v.wheels, false),
+        bp::String("base_type", ground::ToString(v.base_type), {}, false, false),
+        bp::Int("generation", v.generation, v.generation, v.generation, false),
+        bp::String("object_type", "", {}, false, false),
+        bp::String("special_type", v.special_type, {}, false, false),
+        bp::Bool("has_dynamic_doors", false, false),
+        bp::Bool("has_lights", v.has_lights, false),
+        bp::Rgb("color", v.colors.front(), v.colors),
+    };
+    if (v.base_type == ground::BaseType::kBicycle || v.base_type == ground::BaseType::kMotorcycle) {
+      attrs.push_back(bp::String("driver_id", "0", {"0", "1", "2"}));
+    }
+    out.push_back(bp::Make(v.id, msg::ActorKind::ACTOR_VEHICLE, std::move(attrs), {}, v.half_extents.x(),
+                           v.half_extents.y(), v.half_extents.z()));
+  }
+  for (const auto& w : ground::WalkerCatalog()) {
+    char walk[32], run[32];
+    std::snprintf(walk, sizeof walk, "%.2f", w.walk_speed);
+    std::snprintf(run, sizeof run, "%.2f", w.run_speed);
+    std::vector<msg::AttributeDeclaration> attrs = {
+        bp::String("role_name", "walker"),
+        bp::Bool("is_invincible", true),
+        bp::String("speed", walk, {walk, run}),
+        bp::String("gender", w.gender, {"male", "female"}, false, false),
+        bp::String("age", w.age, {"adult", "child"}, false, false),
+        bp::Int("generation", w.generation, w.generation, w.generation, false),
+        bp::Bool("can_use_wheelchair", false, false),
+        bp::Float("height", w.height, w.height, w.height, false),
+        bp::Float("width", 2 * w.radius, 2 * w.radius, 2 * w.radius, false),
+    };
+    out.push_back(bp::Make(w.id, msg::ActorKind::ACTOR_WALKER, std::move(attrs), {}, w.radius, w.radius, w.height / 2));
+  }
+  out.push_back(bp::Make(ground::kWalkerControllerBlueprint, msg::ActorKind::ACTOR_CONTROLLER,
+                         {bp::String("role_name", "")}));
+  return out;
+}
+
+}  // namespace lockstep::ground_wire

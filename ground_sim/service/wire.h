@@ -1,0 +1,27 @@
+#pragma once
+// Conversions between the wire types (idl/) and the ground core's types, and the
+// blueprint declarations ground_sim publishes.
+#include <optional>
+#include <vector>
+
+#include "lockstep/ground/world.h"
+#include "lockstep/runtime/messages.h"
+
+namespace lockstep::ground_wire {
+
+ground::Vec3 ToVec(const msg::Vector3& v);
+msg::Vector3 FromVec(const ground::Vec3& v);
+ground::Pose ToPose(const msg::Pose& p);
+msg::Pose FromPose(const ground::Pose& p);
+msg::VehiclePhysicsControl ToWire(const ground::VehiclePhysics& p);
+ground::VehiclePhysics FromWire(const msg::VehiclePhysicsControl& p);
+msg::LaneMarking ToWire(const map::LaneMarking& m);
+msg::ObjectKind ToWire(ground::ObjectKind k);
+msg::TrafficLightColor ToWire(ground::LightColor c);
+std::optional<ground::LightColor> FromWire(msg::TrafficLightColor c);
+std::optional<ground::TmParam> FromWire(msg::TrafficManagerParameter p);
+
+// CARLA-compatible vehicles and walkers, and controller.ai.walker.
+std::vector<msg::BlueprintDeclaration> Blueprints();
+
+}  // namespace lockstep::ground_wire

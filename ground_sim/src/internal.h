@@ -1,0 +1,225 @@
+#pragma once
+// Shared internals of the ground world (ODE handles, per-actor state).
+#include <array>
+#include <deque>
+#include <map>
+#include <memory>
+#include <set>
+#include <vector>
+
+#include <ode/ode.h>
+
+#include "lockstep/ground/world.h"
+
+namespace lockstep::ground {
+
+// splitmix64: a tiny seeded generator whose whole state is one word (saved with the world).
+struct Rng {
+  uint64_t s = 0;
+  uint64_t Next() {
+    uint64_t z = (s += 0x9E3779B97F4A7C15ull);
+    z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+    z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+    return z ^ (z >> 31);
+  }
+  double Uniform() { return static_cast<double>(Next() >> 11) * 0x1.0p-53; }
+  bool Percent(double p) { return p > 0 && Uniform() * 100.0 < p; }
+};
+uint64_t MixSeed(uint64_t seed, uint64_t id);
+
+enum class GeomKind : uint8_t { kStatic, kVehicle, kWalker, kExternal };
+
+// User data of every ODE geom: who it belongs to.
+struct GeomTag {
+  GeomKind kind = GeomKind::kStatic;
+  uint32_t actor = 0;
+  uint8_t semantic = 0;
+  ObjectKind object = ObjectKind::kStatic;
+};
+
+struct TmState {
+  std::deque<map::Waypoint> path;        // lane-centre points ahead (path[0] at or behind the car)
+  std::deque<map::Waypoint> planned;     // set_path / lane-change points still to append
+  std::vector<int> route;                // set_route: options for the next junctions (1 L, 2 R, 3 S)
+  Rng rng;
+  double speed = 0;                      // m/s, kinematic mode speed
+  double blocked = 0;                    // s below 0.1 m/s
+  int committed_junction = -1;           // junction it may cross
+  double waiting = 0;                    // s waiting at a junction entry
+  int lane_change = 0;                   // forced: -1 left, +1 right
+  double lane_change_cooldown = 0;       // s
+  double random_draw_timer = 0;
+  uint64_t ignore_draw_key = 0;          // junction entry the ignore-lights draw was made for
+  bool ignore_light = false;
+  uint64_t entry_key = 0;                // junction entry ahead (lane key) last step
+  double front_to_line = -1;             // m from the front bumper to its stop line last step
+  Pose kin_target;                       // kinematic: pose at the end of this step
+  TmVehicleParams params;
+  // Outputs of the last decision.
+  double target_speed = 0;
+  double steer_angle = 0;                // rad, bicycle, + left
+  int light = -1;                        // light ahead governing it
+  double light_distance = -1;
+};
+
+struct VehicleActor {
+  uint32_t id = 0;
+  std::string blueprint;
+  const VehicleSpec* spec = nullptr;
+  VehiclePhysics physics;
+  SpawnAttributes attributes;
+  GeomTag tag;
+  dBodyID body = nullptr;
+  dGeomID geom = nullptr;
+  VehicleControl control;
+  bool use_ackermann = false;
+  AckermannControl ackermann;
+  double ackermann_integral = 0;
+  double steer_angle = 0;                // rad, current front (bicycle) angle, + left
+  bool simulate_physics = true;
+  bool kinematic = false;                // moved kinematically this step
+  int gear = 1;
+  double gear_timer = 0;
+  Vec3 prev_velocity = Vec3::Zero();
+  Vec3 acceleration = Vec3::Zero();
+  uint32_t light_state = 0;
+  bool autopilot = false;
+  TmState tm;
+  map::Footprint footprint{};
+  bool has_footprint = false;
+  double speed_limit = 30 / 3.6;
+  double opposite_lane = 0, sidewalk = 0;
+  Infractions infractions;
+  bool hero() const { return attributes.role_name == "hero"; }
+};
+
+struct WalkerActor {
+  uint32_t id = 0;
+  std::string blueprint;
+  const WalkerSpec* spec = nullptr;
+  SpawnAttributes attributes;
+  GeomTag tag;
+  dBodyID body = nullptr;
+  dGeomID geom = nullptr;
+  WalkerControl control;
+  double vertical_speed = 0;             // m/s, jumping
+  bool airborne = false;
+  Vec3 velocity = Vec3::Zero();
+  uint32_t controller = 0;               // AI controller actor, 0 = none
+};
+
+struct ControllerActor {
+  uint32_t id = 0;
+  uint32_t walker = 0;
+  bool running = false;
+  double max_speed = 1.4;                // m/s
+  bool has_goal = false;
+  Vec3 goal = Vec3::Zero();
+  std::deque<map::Waypoint> path;        // sidewalk points towards the goal
+  Rng rng;
+};
+
+struct ExternalActor {
+  ExternalBody body;
+  GeomTag tag;
+  dBodyID ode_body = nullptr;
+  dGeomID geom = nullptr;
+};
+
+// What the Traffic Manager sees of another actor at the start of a step.
+struct Obstacle {
+  uint32_t id = 0;
+  Vec3 position = Vec3::Zero();
+  Vec3 velocity = Vec3::Zero();
+  Eigen::Vector2d forward = Eigen::Vector2d(1, 0);
+  double half_x = 0, half_y = 0;
+  bool walker = false;
+};
+
+struct ContactRecord {
+  uint32_t a = 0, b = 0;                 // actor ids (b = 0 for static)
+  const GeomTag* ta = nullptr;
+  const GeomTag* tb = nullptr;
+  dContactGeom geom{};
+};
+
+struct World::Impl {
+  std::shared_ptr<const Town> town;
+  uint64_t seed = 0;
+  uint64_t frame = 0;
+  PhysicsSettings settings;
+  TmGlobal tm;
+  Rng tm_rng;                            // TM-wide draws (respawn points)
+
+  dWorldID world = nullptr;
+  dSpaceID static_space = nullptr;
+  dSpaceID actor_space = nullptr;
+  dJointGroupID contacts = nullptr;
+  std::vector<dTriMeshDataID> mesh_data;
+  std::vector<std::unique_ptr<GeomTag>> static_tags;
+  GeomTag ground_tag;
+
+  std::map<uint32_t, std::unique_ptr<VehicleActor>> vehicles;
+  std::map<uint32_t, std::unique_ptr<WalkerActor>> walkers;
+  std::map<uint32_t, ControllerActor> controllers;
+  std::vector<std::unique_ptr<ExternalActor>> externals;
+  std::vector<LightState> lights;
+  std::vector<int> group_current;        // per group: index into its lights of the green one
+  std::vector<std::vector<int>> group_lights;
+  std::vector<bool> group_all_red;       // the group is in its all-red gap
+
+  std::vector<Collision> collisions;
+  std::vector<LaneInvasion> invasions;
+  std::map<std::pair<uint32_t, uint32_t>, Collision> pending_collisions;  // (actor, other) -> sum
+  std::vector<ContactRecord> contact_buffer;
+  std::vector<dJointFeedback> feedback;
+  std::vector<std::pair<size_t, size_t>> feedback_owner;  // feedback index -> contact index
+
+  Impl(std::shared_ptr<const Town> t, uint64_t s, PhysicsSettings ps);
+  ~Impl();
+
+  // world.cpp
+  void BuildStatics();
+  void CreateVehicleBody(VehicleActor* v, const Pose& pose);
+  void CreateWalkerBody(WalkerActor* w, const Pose& pose);
+  void DestroyBody(dBodyID b, dGeomID g);
+  VehicleActor* FindVehicle(uint32_t id);
+  WalkerActor* FindWalker(uint32_t id);
+  double GroundHeight(const Vec3& p, double up, double down, bool* hit) const;
+  void Collide(bool record_only_kinematic);
+  void Substep(double h, bool last);
+  void RecordCollision(uint32_t actor, uint32_t other, ObjectKind kind, uint8_t tag, const Vec3& impulse);
+  void FinishEvents();
+  void UpdateMeasurements(double dt);
+  void SyncExternals(double dt);
+
+  // vehicle_dynamics.cpp
+  void ApplyWheelForces(VehicleActor* v, double h);
+  void UpdateGear(VehicleActor* v, double h);
+  void AckermannToControl(VehicleActor* v, double h);
+
+  // traffic_lights.cpp
+  void InitLights();
+  void StepLights(double dt);
+
+  // traffic_manager.cpp
+  void StepTrafficManager(double dt);
+  void TmVehicle(VehicleActor* v, double dt, std::map<int, std::vector<const VehicleActor*>>* junction_users,
+                 const std::vector<Obstacle>& obstacles);
+  void FillPath(VehicleActor* v);
+  void MoveKinematic(VehicleActor* v, double dt);
+  void AnchorPath(VehicleActor* v);
+  void Respawn(VehicleActor* v);
+  bool HybridKinematic(const VehicleActor& v) const;
+
+  // walkers.cpp
+  void StepWalkers(double dt);
+  void StepControllers(double dt);
+};
+
+Pose BodyPose(dBodyID b);
+void SetBodyPose(dBodyID b, const Pose& p);
+Vec3 ToVec(const dReal* v);
+double Wrap(double a);
+
+}  // namespace lockstep::ground

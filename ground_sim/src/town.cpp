@@ -1,0 +1,64 @@
+#include "lockstep/ground/town.h"
+
+#include <cstring>
+
+#include "lockstep/map/scene_mesh.h"
+
+namespace lockstep::ground {
+
+Town::Town(map::Map map, std::vector<map::Mesh> meshes) : map_(std::move(map)), meshes_(std::move(meshes)) {
+  // One group per signalled junction (CARLA's traffic light group); a light without a
+  // junction forms its own group.
+  std::map<int, int> junction_group;
+  for (const auto& info : map_.TrafficLights()) {
+    TownLight l;
+    l.info = info;
+    if (info.junction >= 0) {
+      auto [it, fresh] = junction_group.emplace(info.junction, group_count_);
+      if (fresh) ++group_count_;
+      l.group = it->second;
+    } else {
+      l.group = group_count_++;
+    }
+    const int index = static_cast<int>(lights_.size());
+    for (const auto& wp : info.stop_waypoints) lane_light_.emplace(std::make_tuple(wp.road, wp.section, wp.lane), index);
+    lights_.push_back(std::move(l));
+  }
+  spawn_points_ = map_.SpawnPoints();
+  walker_spawn_points_ = map_.PedestrianSpawnPoints();
+  uint64_t h = 1469598103934665603ull;
+  auto mix = [&h](const void* p, size_t n) {
+    const auto* b = static_cast<const unsigned char*>(p);
+    for (size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
+  };
+  for (const auto& m : meshes_) {
+    mix(m.vertices.data(), m.vertices.size() * sizeof(float));
+    mix(&m.semantic_tag, 1);
+  }
+  mix(map_.Name().data(), map_.Name().size());
+  hash_ = h;
+}
+
+std::shared_ptr<const Town> Town::Build(map::Map map, const map::Scene& scene) {
+  std::vector<map::Mesh> keep;
+  for (auto& m : map::BuildWorldMeshes(map, scene)) {
+    // Road lines are paint (no collision); the ground quad under the map becomes an ODE
+    // plane of the world (exact and cheaper than two huge triangles).
+    if (m.semantic_tag == map::semantic::kRoadLine || m.semantic_tag == map::semantic::kGround || m.name == "ground") continue;
+    keep.push_back(std::move(m));
+  }
+  return std::make_shared<Town>(std::move(map), std::move(keep));
+}
+
+std::shared_ptr<const Town> Town::Load(const std::string& xodr_path, uint64_t scene_seed) {
+  map::Map m = map::Map::Load(xodr_path);
+  const map::Scene scene = map::GenerateScene(m, scene_seed);
+  return Build(std::move(m), scene);
+}
+
+int Town::LightOfLane(int road, int section, int lane) const {
+  auto it = lane_light_.find(std::make_tuple(road, section, lane));
+  return it == lane_light_.end() ? -1 : it->second;
+}
+
+}  // namespace lockstep::ground

@@ -1,0 +1,89 @@
+// Traffic light groups: one per signalled junction. The group's lights take turns:
+// green, yellow, then all red for red_time, then the next light (CARLA's cycle).
+#include "internal.h"
+
+namespace lockstep::ground {
+
+void World::Impl::InitLights() {
+  const auto& tl = town->Lights();
+  lights.assign(tl.size(), LightState{});
+  group_lights.assign(static_cast<size_t>(town->GroupCount()), {});
+  for (size_t i = 0; i < tl.size(); ++i) {
+    lights[i].group = tl[i].group;
+    group_lights[static_cast<size_t>(tl[i].group)].push_back(static_cast<int>(i));
+  }
+  group_current.assign(group_lights.size(), 0);
+  group_all_red.assign(group_lights.size(), false);
+  for (const auto& g : group_lights) {
+    if (!g.empty()) lights[static_cast<size_t>(g.front())].color = LightColor::kGreen;
+  }
+}
+
+void World::Impl::StepLights(double dt) {
+  for (size_t g = 0; g < group_lights.size(); ++g) {
+    const auto& members = group_lights[g];
+    if (members.empty()) continue;
+    for (int i : members) lights[static_cast<size_t>(i)].elapsed += dt;
+    LightState& cur = lights[static_cast<size_t>(members[static_cast<size_t>(group_current[g])])];
+    if (cur.frozen) continue;
+    if (cur.color == LightColor::kGreen && cur.elapsed >= cur.green_time) {
+      cur.color = LightColor::kYellow;
+      cur.elapsed = 0;
+    } else if (cur.color == LightColor::kYellow && cur.elapsed >= cur.yellow_time) {
+      cur.color = LightColor::kRed;
+      cur.elapsed = 0;
+      group_all_red[g] = true;
+    } else if (cur.color == LightColor::kRed && group_all_red[g] && cur.elapsed >= cur.red_time) {
+      group_all_red[g] = false;
+      group_current[g] = (group_current[g] + 1) % static_cast<int>(members.size());
+      LightState& next = lights[static_cast<size_t>(members[static_cast<size_t>(group_current[g])])];
+      next.color = LightColor::kGreen;
+      next.elapsed = 0;
+    }
+  }
+}
+
+std::string World::SetTrafficLight(uint32_t id, std::optional<LightColor> color, double green, double yellow, double red,
+                                   std::optional<bool> freeze) {
+  auto& I = *impl_;
+  if (id == 0 || id > I.lights.size()) return "actor " + std::to_string(id) + " is not a traffic light of this map";
+  const size_t index = id - 1;
+  LightState& l = I.lights[index];
+  for (double t : {green, yellow, red}) {
+    if (std::isnan(t) || t > 3600) return "traffic light times must be <= 3600 s (< 0 = unchanged)";
+  }
+  if (green >= 0) l.green_time = green;
+  if (yellow >= 0) l.yellow_time = yellow;
+  if (red >= 0) l.red_time = red;
+  const size_t g = static_cast<size_t>(l.group);
+  if (color && *color != l.color) {
+    const auto& members = I.group_lights[g];
+    if (*color == LightColor::kGreen || *color == LightColor::kYellow) {
+      // This light becomes the group's active one; the others turn red.
+      for (size_t k = 0; k < members.size(); ++k) {
+        LightState& o = I.lights[static_cast<size_t>(members[k])];
+        if (members[k] == static_cast<int>(index)) {
+          I.group_current[g] = static_cast<int>(k);
+        } else if (o.color != LightColor::kRed) {
+          o.color = LightColor::kRed;
+          o.elapsed = 0;
+        }
+      }
+      I.group_all_red[g] = false;
+    } else if (*color == LightColor::kRed && members[static_cast<size_t>(I.group_current[g])] == static_cast<int>(index)) {
+      I.group_all_red[g] = true;
+    }
+    l.color = *color;
+    l.elapsed = 0;
+  }
+  if (freeze) {
+    for (int k : I.group_lights[g]) I.lights[static_cast<size_t>(k)].frozen = *freeze;
+  }
+  return {};
+}
+
+void World::FreezeAllLights(bool freeze) {
+  for (auto& l : impl_->lights) l.frozen = freeze;
+}
+
+}  // namespace lockstep::ground

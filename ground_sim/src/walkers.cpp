@@ -1,0 +1,154 @@
+// Walkers: kinematic capsules that follow their WalkerControl, stand on the town's
+// surfaces and stop at walls. The AI controller (controller.ai.walker) walks sidewalks.
+#include <algorithm>
+#include <cmath>
+
+#include "internal.h"
+
+namespace lockstep::ground {
+namespace {
+
+struct BlockQuery {
+  bool blocked = false;
+};
+
+void BlockCallback(void* data, dGeomID o1, dGeomID o2) {
+  auto* q = static_cast<BlockQuery*>(data);
+  if (q->blocked) return;
+  const auto* t = static_cast<const GeomTag*>(dGeomGetData(o2));
+  if (!t || t->object == ObjectKind::kGround) return;  // surfaces carry walkers, they do not stop them
+  dContactGeom c[1];
+  if (dCollide(o1, o2, 1, c, sizeof(dContactGeom)) > 0) q->blocked = true;
+}
+
+constexpr double kArrive = 1.0;  // m: a path point counts as reached
+
+}  // namespace
+
+void World::Impl::StepWalkers(double dt) {
+  for (auto& [id, wp] : walkers) {
+    WalkerActor& w = *wp;
+    const Pose pose = BodyPose(w.body);
+    const double half_h = w.spec->height / 2;
+    Vec3 dir = w.control.direction;
+    dir.z() = 0;
+    const double n = dir.norm();
+    Vec3 step = Vec3::Zero();
+    if (n > 1e-9 && w.control.speed > 0) step = dir / n * (w.control.speed * dt);
+    Vec3 next = pose.position + step;
+    if (!step.isZero()) {
+      // Blocked by a wall, pole or building: stay.
+      SetBodyPose(w.body, Pose::FromYaw(next, pose.Yaw()));
+      BlockQuery q;
+      dSpaceCollide2(w.geom, reinterpret_cast<dGeomID>(static_space), &q, &BlockCallback);
+      if (q.blocked) next = pose.position;
+    }
+    bool hit = false;
+    const double feet = next.z() - half_h;
+    const double ground = GroundHeight(Vec3(next.x(), next.y(), feet), 0.5, 3.0, &hit);
+    double z = hit ? ground + half_h : next.z();
+    if (w.control.jump && !w.airborne) {
+      w.vertical_speed = 3.0;
+      w.airborne = true;
+    }
+    if (w.airborne) {
+      z = pose.position.z() + w.vertical_speed * dt;
+      w.vertical_speed -= 9.81 * dt;
+      if (z <= ground + half_h || !hit) {
+        z = hit ? ground + half_h : z;
+        w.airborne = !hit;
+        w.vertical_speed = 0;
+      }
+    }
+    next.z() = z;
+    const double yaw = step.head<2>().norm() > 1e-6 ? std::atan2(step.y(), step.x()) : pose.Yaw();
+    w.velocity = (next - pose.position) / dt;
+    // Kinematic body: ODE carries it over the sub-steps with this velocity.
+    SetBodyPose(w.body, Pose::FromYaw(pose.position, yaw));
+    dBodySetLinearVel(w.body, w.velocity.x(), w.velocity.y(), w.velocity.z());
+    dBodySetAngularVel(w.body, 0, 0, 0);
+  }
+}
+
+void World::Impl::StepControllers(double) {
+  const map::Map& m = town->Map();
+  for (auto& [id, c] : controllers) {
+    WalkerActor* w = FindWalker(c.walker);
+    if (!w) continue;
+    if (!c.running) continue;
+    const Vec3 pos = BodyPose(w->body).position;
+    if (c.has_goal) {
+      // go_to_location: straight towards the goal (no navigation mesh; docs/ground.md).
+      Vec3 d = c.goal - pos;
+      d.z() = 0;
+      if (d.norm() < kArrive) {
+        c.has_goal = false;
+        w->control.speed = 0;
+      } else {
+        w->control.direction = d.normalized();
+        w->control.speed = c.max_speed;
+      }
+      w->control.jump = false;
+      continue;
+    }
+    // Wander along sidewalk lanes, random branch at each split, turning back at dead ends.
+    auto& path = c.path;
+    while (!path.empty() && (path.front().transform.location - pos).head<2>().norm() < kArrive) path.pop_front();
+    if (path.empty()) {
+      auto start = m.NearestWaypoint(pos, true, map::LaneType::Sidewalk);
+      if (!start) {
+        w->control.speed = 0;
+        continue;
+      }
+      path.push_back(*start);
+    }
+    while (path.size() < 4) {
+      auto next = m.Next(path.back(), 2.0);
+      if (next.empty()) next = m.Previous(path.back(), 2.0);
+      if (next.empty()) break;
+      std::sort(next.begin(), next.end(), [](const map::Waypoint& x, const map::Waypoint& y) {
+        return std::make_tuple(x.road, x.lane, x.s) < std::make_tuple(y.road, y.lane, y.s);
+      });
+      const auto& pick = next[static_cast<size_t>(c.rng.Next() % next.size())];
+      if ((pick.transform.location - path.back().transform.location).head<2>().norm() < 0.1) break;
+      path.push_back(pick);
+    }
+    Vec3 d = path.front().transform.location - pos;
+    d.z() = 0;
+    if (d.norm() > 1e-6) w->control.direction = d.normalized();
+    w->control.speed = c.max_speed;
+    w->control.jump = false;
+  }
+}
+
+std::string World::ControllerStart(uint32_t id) {
+  auto it = impl_->controllers.find(id);
+  if (it == impl_->controllers.end()) return "actor " + std::to_string(id) + " is not a controller.ai.walker";
+  it->second.running = true;
+  return {};
+}
+std::string World::ControllerStop(uint32_t id) {
+  auto it = impl_->controllers.find(id);
+  if (it == impl_->controllers.end()) return "actor " + std::to_string(id) + " is not a controller.ai.walker";
+  it->second.running = false;
+  it->second.has_goal = false;
+  if (auto* w = impl_->FindWalker(it->second.walker)) w->control.speed = 0;
+  return {};
+}
+std::string World::ControllerGoTo(uint32_t id, const Vec3& location) {
+  auto it = impl_->controllers.find(id);
+  if (it == impl_->controllers.end()) return "actor " + std::to_string(id) + " is not a controller.ai.walker";
+  if (!location.allFinite()) return "go_to_location: location is not finite";
+  it->second.goal = location;
+  it->second.has_goal = true;
+  return {};
+}
+std::string World::ControllerMaxSpeed(uint32_t id, double speed) {
+  auto it = impl_->controllers.find(id);
+  if (it == impl_->controllers.end()) return "actor " + std::to_string(id) + " is not a controller.ai.walker";
+  if (!(speed >= 0 && speed <= 10)) return "set_max_speed: speed must be in 0..10 m/s";
+  it->second.max_speed = speed;
+  return {};
+}
+
+}  // namespace lockstep::ground

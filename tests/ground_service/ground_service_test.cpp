@@ -1,0 +1,217 @@
+// The ground_sim service behind the real coordinator on the in-process bus, in CARLA's
+// Town01: vehicles spawned by CARLA ids, GroundState and PhysicsEvents every frame,
+// controls applied, bad commands rejected with a reason, the Traffic Manager driving.
+#include <gtest/gtest.h>
+
+#include <map>
+#include <mutex>
+#include <thread>
+
+#include "ground_service.h"
+#include "lockstep/coordinator/coordinator.h"
+#include "lockstep/map/map.h"
+#include "lockstep/runtime/command_builders.h"
+#include "observer.h"
+
+namespace lockstep {
+namespace {
+
+using namespace std::chrono_literals;
+
+const std::string kTown01 = std::string(LOCKSTEP_CARLA_MAPS_DIR) + "/Town01.xodr";
+
+class GroundServiceTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    LaunchConfig c;
+    c.world = DefaultWorldSettings();
+    c.world.synchronous_mode(true);
+    c.world.service_timeout(30);
+    c.map = kTown01;
+    c.services.push_back({"ground_sim", "ground_sim", "", {}, true, false, "never"});
+    bus_ = CreateInProcessBus();
+    states_ = Reader<msg::GroundState>(*bus_, topics::kGroundState, [this](const msg::GroundState& s, const SampleInfo&) {
+      std::lock_guard<std::mutex> lock(mu_);
+      ground_[s.stamp().frame()] = s;
+    });
+    physics_ = Reader<msg::PhysicsEvents>(*bus_, topics::kPhysicsEvents, [this](const msg::PhysicsEvents& e, const SampleInfo&) {
+      std::lock_guard<std::mutex> lock(mu_);
+      physics_events_[e.stamp().frame()] = e;
+    });
+    events_ = Reader<msg::SimEvent>(*bus_, topics::kEvent, [this](const msg::SimEvent& e, const SampleInfo&) {
+      std::lock_guard<std::mutex> lock(mu_);
+      failures_.push_back(e);
+    });
+    observer_ = std::make_unique<testing::Observer>(*bus_);
+    coordinator_ = std::make_unique<Coordinator>(*bus_, c);
+    core_ = std::make_unique<GroundService>(*bus_);
+    runner_ = std::make_unique<ServiceRunner>(*bus_, ServiceOptions{"ground_sim", "ground_sim", false}, *core_);
+    runner_thread_ = std::thread([this] { runner_->Run(stop_); });
+    coordinator_thread_ = std::thread([this] { coordinator_->Run(stop_); });
+    ASSERT_TRUE(observer_->WaitUntil([&] { return observer_->status() && observer_->status()->state() == msg::RunState::RUN_READY; }, 60s));
+  }
+  void TearDown() override {
+    stop_ = true;
+    if (coordinator_thread_.joinable()) coordinator_thread_.join();
+    if (runner_thread_.joinable()) runner_thread_.join();
+  }
+  msg::CommandReply Send(msg::CommandBody b) {
+    auto r = observer_->WaitReply(observer_->Send(std::move(b)), 20s);
+    EXPECT_TRUE(r.has_value());
+    return r.value_or(msg::CommandReply{});
+  }
+  // A Town01 spawn point, as a vehicle pose (the box centre half its height above the road).
+  msg::Pose SpawnPose(size_t index, double half_z = 0.745) {
+    static const map::Map town = map::Map::Load(kTown01);
+    const auto sp = town.SpawnPoints().at(index);
+    return MakePose(sp.location.x(), sp.location.y(), sp.location.z() - 0.5 + half_z + 0.02, sp.yaw);
+  }
+  uint32_t Spawn(const std::string& bp, const msg::Pose& pose, const AttributeList& attrs = {}) {
+    auto r = Send(SpawnBody(bp, pose, attrs));
+    EXPECT_TRUE(r.accepted()) << r.reason();
+    return r.actor();
+  }
+  void Tick(uint32_t n) {
+    msg::TickRequest t;
+    t.count(n);
+    msg::CommandBody b;
+    b.tick_request(t);
+    auto r = Send(b);
+    ASSERT_TRUE(r.accepted()) << r.reason();
+    ASSERT_TRUE(observer_->WaitUntil([&] { return observer_->last_frame() >= r.frame(); }, 60s));
+    ASSERT_TRUE(observer_->WaitUntil([&] { return State(r.frame()).has_value(); }, 10s));
+  }
+  std::optional<msg::GroundState> State(uint64_t frame) {
+    std::lock_guard<std::mutex> lock(mu_);
+    auto it = ground_.find(frame);
+    if (it == ground_.end()) return std::nullopt;
+    return it->second;
+  }
+  std::optional<msg::VehicleState> Vehicle(uint64_t frame, uint32_t id) {
+    auto s = State(frame);
+    if (!s) return std::nullopt;
+    for (const auto& v : s->vehicles()) {
+      if (v.actor() == id) return v;
+    }
+    return std::nullopt;
+  }
+  bool WaitFailure(const std::string& needle) {
+    return observer_->WaitUntil([&] {
+      std::lock_guard<std::mutex> lock(mu_);
+      for (const auto& e : failures_) {
+        if (e.kind() == msg::EventKind::EVENT_COMMAND_FAILED && e.message().to_string().find(needle) != std::string::npos) return true;
+      }
+      return false;
+    }, 10s);
+  }
+
+  std::unique_ptr<Bus> bus_;
+  std::mutex mu_;
+  std::map<uint64_t, msg::GroundState> ground_;
+  std::map<uint64_t, msg::PhysicsEvents> physics_events_;
+  std::vector<msg::SimEvent> failures_;
+  Reader<msg::GroundState> states_;
+  Reader<msg::PhysicsEvents> physics_;
+  Reader<msg::SimEvent> events_;
+  std::unique_ptr<testing::Observer> observer_;
+  std::unique_ptr<Coordinator> coordinator_;
+  std::unique_ptr<GroundService> core_;
+  std::unique_ptr<ServiceRunner> runner_;
+  std::thread runner_thread_, coordinator_thread_;
+  std::atomic<bool> stop_{false};
+};
+
+TEST_F(GroundServiceTest, DrivesACarlaBlueprintAndPublishesEveryFrame) {
+  const uint32_t car = Spawn("vehicle.tesla.model3", SpawnPose(0), {{"role_name", "hero"}});
+  msg::VehicleControl c;
+  c.actor(car);
+  c.throttle(0.6);
+  msg::CommandBody b;
+  b.vehicle_control(c);
+  ASSERT_TRUE(Send(b).accepted());
+  Tick(40);
+  const uint64_t last = observer_->last_frame();
+  ASSERT_TRUE(observer_->WaitUntil([&] {
+    std::lock_guard<std::mutex> lock(mu_);
+    return physics_events_.count(last) > 0;
+  }, 10s));
+  std::lock_guard<std::mutex> lock(mu_);
+  for (uint64_t f = 1; f <= last; ++f) {
+    ASSERT_TRUE(ground_.count(f)) << "no GroundState for frame " << f;
+    ASSERT_TRUE(physics_events_.count(f)) << "no PhysicsEvents for frame " << f;
+    EXPECT_EQ(physics_events_.at(f).service().to_string(), "ground_sim");
+    EXPECT_NE(ground_.at(f).state_hash(), 0u);
+  }
+  const auto& s = ground_.at(last);
+  ASSERT_EQ(s.vehicles().size(), 1u);
+  const auto& v = s.vehicles()[0];
+  EXPECT_EQ(v.blueprint().to_string(), "vehicle.tesla.model3");
+  EXPECT_EQ(v.role_name().to_string(), "hero");
+  EXPECT_GT(std::hypot(v.velocity().x(), v.velocity().y()), 3.0);
+  EXPECT_GT(v.physics().mass(), 1000);
+  // Town01's lights are the coordinator's actors 1..n, grouped by junction.
+  ASSERT_FALSE(s.traffic_lights().empty());
+  for (size_t i = 0; i < s.traffic_lights().size(); ++i) EXPECT_EQ(s.traffic_lights()[i].actor(), i + 1);
+}
+
+TEST_F(GroundServiceTest, RejectsWhatItCannotApplyWithAReason) {
+  const uint32_t car = Spawn("vehicle.audi.tt", SpawnPose(1, 0.693));
+  // The coordinator: a walker command to a vehicle; a bad colour attribute.
+  msg::WalkerControl w;
+  w.actor(car);
+  w.speed(1);
+  msg::CommandBody wb;
+  wb.walker_control(w);
+  auto r = Send(wb);
+  EXPECT_FALSE(r.accepted());
+  EXPECT_NE(r.reason().to_string().find("vehicle"), std::string::npos) << r.reason();
+  auto bad = Send(SpawnBody("vehicle.audi.tt", SpawnPose(2, 0.693), {{"color", "300,0,0"}}));
+  EXPECT_FALSE(bad.accepted());
+  EXPECT_NE(bad.reason().to_string().find("color"), std::string::npos) << bad.reason();
+  // ground_sim: manual control of a car the Traffic Manager drives; a spawn on top of a car.
+  msg::TrafficManagerCommand tm;
+  tm.parameter(msg::TrafficManagerParameter::TM_AUTOPILOT);
+  tm.actor(car);
+  tm.value(1);
+  msg::CommandBody tb;
+  tb.traffic_manager(tm);
+  ASSERT_TRUE(Send(tb).accepted());
+  msg::VehicleControl c;
+  c.actor(car);
+  c.throttle(1);
+  msg::CommandBody cb;
+  cb.vehicle_control(c);
+  ASSERT_TRUE(Send(cb).accepted());
+  const uint32_t twin = Spawn("vehicle.audi.tt", SpawnPose(1, 0.693));
+  Tick(2);
+  EXPECT_TRUE(WaitFailure("autopilot"));
+  EXPECT_TRUE(WaitFailure("occupied"));
+  EXPECT_FALSE(Vehicle(observer_->last_frame(), twin).has_value());
+}
+
+TEST_F(GroundServiceTest, TheTrafficManagerDrivesAHandedOverCarAndGivesItBack) {
+  const uint32_t car = Spawn("vehicle.lincoln.mkz_2020", SpawnPose(5, 0.757));
+  msg::TrafficManagerCommand tm;
+  tm.parameter(msg::TrafficManagerParameter::TM_AUTOPILOT);
+  tm.actor(car);
+  tm.value(1);
+  msg::CommandBody tb;
+  tb.traffic_manager(tm);
+  ASSERT_TRUE(Send(tb).accepted());
+  Tick(200);
+  auto v = Vehicle(observer_->last_frame(), car);
+  ASSERT_TRUE(v);
+  EXPECT_TRUE(v->autopilot());
+  const auto start = SpawnPose(5).position();
+  EXPECT_GT(std::hypot(v->transform().position().x() - start.x(), v->transform().position().y() - start.y()), 20.0);
+  tm.value(0);
+  tb.traffic_manager(tm);
+  ASSERT_TRUE(Send(tb).accepted());
+  Tick(1);
+  v = Vehicle(observer_->last_frame(), car);
+  ASSERT_TRUE(v);
+  EXPECT_FALSE(v->autopilot());
+}
+
+}  // namespace
+}  // namespace lockstep

@@ -1,5 +1,7 @@
 #include "lockstep/coordinator/membership.h"
 
+#include <cstdio>
+
 #include "lockstep/runtime/log.h"
 
 namespace lockstep {
@@ -66,6 +68,18 @@ bool Membership::OnAck(const std::string& service, uint32_t current_run, const m
     m.last_hash = 0;
     m.replay_from = 0;
     m.divergence.clear();
+  }
+  if (a.frame() == m.last_frame && m.last_frame != 0 && m.last_hash != 0 && a.state_hash() != 0 &&
+      a.state_hash() != m.last_hash && m.divergence.empty()) {
+    // The same frame acked twice with different states (a replacement that did not rebuild
+    // what the failed process had): the run no longer follows its tick stream.
+    char why[160];
+    std::snprintf(why, sizeof why, "frame %llu acknowledged with state hash %016llx after %016llx",
+                  static_cast<unsigned long long>(a.frame()), static_cast<unsigned long long>(a.state_hash()),
+                  static_cast<unsigned long long>(m.last_hash));
+    m.divergence = why;
+    spdlog::error("service '{}' diverged in run {}: {}", service, current_run, m.divergence);
+    changed = true;
   }
   if (a.frame() >= m.last_frame) {
     m.last_frame = a.frame();

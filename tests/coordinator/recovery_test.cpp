@@ -161,7 +161,11 @@ TEST_F(Recovery, ADivergentReplayIsReportedInTheAckTheRunStatusAndFrameDone) {
   ASSERT_TRUE(obs_.WaitUntil([&] { return obs_.status()->diverged(); }, 5s));
   auto m = Member("b");
   ASSERT_TRUE(m);
-  EXPECT_NE(m->divergence().to_string().find("differs from the acknowledged"), std::string::npos) << m->divergence();
+  // Found by the replacement's replay check, or by the coordinator when the re-sent frame
+  // comes back with another state than the failed process acknowledged for it.
+  EXPECT_TRUE(m->divergence().to_string().find("differs from the acknowledged") != std::string::npos ||
+              m->divergence().to_string().find("acknowledged with state hash") != std::string::npos)
+      << m->divergence();
   EXPECT_TRUE(Member("a")->divergence().to_string().empty());
   // A new run starts clean.
   msg::ResetWorld r;
@@ -202,9 +206,9 @@ TEST_F(Recovery, ASnapshotBoundsTheTickLogAndTheReplacementReplaysOnlyFromIt) {
   auto& b = Start("b", std::make_unique<NoopCore>(), 20);
   ASSERT_TRUE(WaitState(msg::RunState::RUN_RUNNING));
   // A client that sends a command every few frames, as a controller would.
-  for (int i = 0; i < 80; ++i) {
+  for (int i = 0; i < 2000 && obs_.last_frame() <= 60; ++i) {
     msg::WeatherParameters w;
-    w.cloudiness(static_cast<float>(i));
+    w.cloudiness(static_cast<float>(i % 100));
     w.fog_distance(0.75f);
     w.scattering_intensity(1);
     msg::CommandBody body;

@@ -49,7 +49,9 @@ struct ServiceRunner::Impl {
   std::atomic<uint64_t> last_frame{0};
   uint64_t last_hash = 0;
   bool can_snapshot = true;
-  uint64_t snapshot_frame = 0;  // frame of our latest snapshot in this run (published or restored)
+  uint64_t snapshot_frame = 0;  // frame of our latest snapshot reported in acks (published or restored)
+  uint64_t published_snapshot = 0;  // our latest published snapshot: reported from the next ack on, so
+                                    // replay_from equals last_frame only for a service with no state
   std::string divergence;       // why our state is not the one the tick stream defines (this run)
   std::string failure;          // why the service stopped, if a step failed (guarded by mu)
   std::atomic<bool> joined{false};
@@ -143,7 +145,7 @@ struct ServiceRunner::Impl {
     s.state_hash(last_hash);
     s.state(std::move(state));
     snapshot_writer.Write(s);
-    snapshot_frame = last_frame;
+    published_snapshot = last_frame;
   }
 
   bool failed() {
@@ -170,6 +172,7 @@ struct ServiceRunner::Impl {
     last_hash = 0;
     can_snapshot = true;
     snapshot_frame = 0;
+    published_snapshot = 0;
     divergence.clear();
   }
 
@@ -233,7 +236,7 @@ struct ServiceRunner::Impl {
       if (snap) {
         core.RestoreState(snap->state());
         restored = snap->frame();
-        snapshot_frame = restored;
+        snapshot_frame = published_snapshot = restored;
         spdlog::info("restored the snapshot of frame {}", restored);
       }
       if (log && log->first_frame() <= restored) {
@@ -332,6 +335,7 @@ struct ServiceRunner::Impl {
     core.Step(tick);
     last_frame = tick.frame();
     last_hash = core.StateHash();
+    snapshot_frame = published_snapshot;
     PublishSnapshot();
     const double us = std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
     SendAck(tick.frame(), us);

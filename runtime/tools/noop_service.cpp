@@ -3,8 +3,9 @@
 // For the barrier's process tests, two environment variables make it a witness:
 //   LOCKSTEP_NOOP_STEP_MS=MAX[:SEED]  each step sleeps a random 0..MAX ms (seeded by SEED,
 //                                     the service name and the frame)
-//   LOCKSTEP_NOOP_LEDGER=FILE         one line per step: "<run> <frame> <start_ns> <end_ns>"
-//                                     (CLOCK_MONOTONIC, comparable across processes)
+//   LOCKSTEP_NOOP_LEDGER=FILE         one line per step: "<run> <frame> <start_ns> <end_ns> <hash>"
+//                                     (CLOCK_MONOTONIC, comparable across processes; the
+//                                     state hash after the step)
 #include <time.h>
 
 #include <chrono>
@@ -42,8 +43,9 @@ class WitnessCore final : public lockstep::NoopCore {
     }
     lockstep::NoopCore::Step(tick);
     if (ledger_ && !replaying()) {
-      std::fprintf(ledger_, "%u %llu %lld %lld\n", tick.run(), static_cast<unsigned long long>(tick.frame()),
-                   static_cast<long long>(start), static_cast<long long>(MonotonicNs()));
+      std::fprintf(ledger_, "%u %llu %lld %lld %llu\n", tick.run(), static_cast<unsigned long long>(tick.frame()),
+                   static_cast<long long>(start), static_cast<long long>(MonotonicNs()),
+                   static_cast<unsigned long long>(StateHash()));
       std::fflush(ledger_);
     }
   }

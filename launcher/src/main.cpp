@@ -48,7 +48,27 @@ int Up(const std::string& config_file, int domain) {
   std::printf("lockstep: starting '%s' on DDS domain %d: coordinator + %zu service(s)\n", config.name.c_str(),
               config.domain_id, config.services.size());
   std::fflush(stdout);
-  lockstep::Supervisor supervisor(std::move(children));
+  // A member the run reports failed while its process still runs is hung (stopped, or a
+  // step stuck while its heartbeat thread goes on): the supervisor replaces it.
+  auto bus = lockstep::CreateDdsBus({config.domain_id, config.qos_file, config.participant_profile, "lockstep-up"});
+  std::mutex mu;
+  std::optional<lockstep::msg::RunStatus> status;
+  lockstep::Reader<lockstep::msg::RunStatus> reader(*bus, lockstep::topics::kRunStatus,
+                                                     [&](const lockstep::msg::RunStatus& s, const lockstep::SampleInfo&) {
+                                                       std::lock_guard<std::mutex> lock(mu);
+                                                       status = s;
+                                                     });
+  auto hung = [&](const std::string& name, pid_t pid) -> std::optional<std::string> {
+    std::lock_guard<std::mutex> lock(mu);
+    if (!status) return std::nullopt;
+    for (const auto& m : status->members()) {
+      if (m.service().to_string() == name && m.pid() == pid && !m.alive() && !m.failure().to_string().empty()) {
+        return m.failure().to_string();
+      }
+    }
+    return std::nullopt;
+  };
+  lockstep::Supervisor supervisor(std::move(children), hung);
   return supervisor.Run(g_stop);
 }
 
@@ -145,7 +165,19 @@ int main(int argc, char** argv) {
     if (*status) return Status(status_domain, profile, wait_s, json);
     if (*map) {
       const std::string tool = BinDir() + "/lockstep-map";
-      std::vector<std::string> rest = map->remaining();
+      // lockstep-map reads its positionals by place: pass options (anywhere on our
+      // command line) after them. Every option but --json takes a value.
+      std::vector<std::string> rest, options;
+      const std::vector<std::string> given = map->remaining();
+      for (size_t i = 0; i < given.size(); ++i) {
+        if (given[i].rfind("--", 0) != 0) {
+          rest.push_back(given[i]);
+          continue;
+        }
+        options.push_back(given[i]);
+        if (given[i] != "--json" && i + 1 < given.size()) options.push_back(given[++i]);
+      }
+      rest.insert(rest.end(), options.begin(), options.end());
       std::vector<char*> args{const_cast<char*>(tool.c_str())};
       for (auto& r : rest) args.push_back(r.data());
       args.push_back(nullptr);

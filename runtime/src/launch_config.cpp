@@ -1,6 +1,7 @@
 #include "lockstep/runtime/launch_config.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <cmath>
 #include <map>
@@ -239,8 +240,23 @@ LaunchConfig ParseLaunchConfig(const std::string& yaml_text, const std::string& 
   return Load(LoadYamlString(yaml_text, source_name), source_name);
 }
 
+std::string BuildDir() {
+  if (const char* env = std::getenv("LOCKSTEP_BUILD_DIR"); env && *env) return env;
+  std::error_code ec;
+  const auto exe = std::filesystem::canonical("/proc/self/exe", ec);
+  return ec ? std::string("build") : exe.parent_path().parent_path().string();  // build/bin/<program>
+}
+
+std::string ExpandBuildDir(const std::string& path) {
+  const std::string var = "${LOCKSTEP_BUILD_DIR}";
+  const size_t at = path.find(var);
+  return at == std::string::npos ? path : path.substr(0, at) + BuildDir() + path.substr(at + var.size());
+}
+
 LaunchConfig LoadLaunchConfig(const std::string& file) {
   LaunchConfig c = Load(LoadYamlFile(file), file);
+  c.map = ExpandBuildDir(c.map);
+  c.output_dir = ExpandBuildDir(c.output_dir);
   // Paths in a config are relative to the config file.
   const std::filesystem::path dir = std::filesystem::path(file).parent_path();
   if (!c.map.empty() && std::filesystem::path(c.map).is_relative()) c.map = (dir / c.map).lexically_normal().string();

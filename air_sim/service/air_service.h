@@ -31,7 +31,10 @@ class AirService final : public ServiceCore {
  private:
   void Apply(const msg::Command& c, uint64_t frame, air::Commands* out);
   void Fail(const msg::FrameStamp& stamp, uint32_t actor, const std::string& why);
-  air::Environment Environment(const msg::Tick& tick);
+  // The vehicles of frame k-1 (Jacobi coupling); throws InputError when they do not come.
+  std::vector<air::VehicleBox> Vehicles(const msg::Tick& tick);
+  air::Environment Environment(std::vector<air::VehicleBox> vehicles) const;
+  void PublishPhysicsEvents(const msg::FrameStamp& stamp);
   msg::AirState Publish(const msg::FrameStamp& stamp) const;
   void LoadTown(const msg::WorldInfo& world);
 
@@ -50,6 +53,11 @@ class AirService final : public ServiceCore {
   std::map<uint32_t, std::string> blueprints_;
   std::map<uint32_t, std::pair<uint64_t, msg::DroneCommandStatus>> last_command_;  // per drone
   std::vector<msg::SimEvent> pending_events_;
+  Writer<msg::PhysicsEvents> physics_writer_;
+  air::GeoReference geo_;                 // the map's geo-reference (GPS, moveToGPS)
+  air::Vec3 api_wind_ = air::Vec3::Zero();  // m/s ENU, simSetWind (all drones)
+  float wind_intensity_ = 0;              // weather's wind_intensity (0..100)
+  double input_timeout_s_ = 10;           // s, world settings' service_timeout: no inputs -> fault
   Reader<msg::MapData> map_reader_;  // last: its callback uses the members above
 };
 

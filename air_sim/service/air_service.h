@@ -12,6 +12,7 @@
 #include "lockstep/air/air.h"
 #include "lockstep/runtime/frame_buffer.h"
 #include "lockstep/runtime/service.h"
+#include "air_blueprints.h"
 
 namespace lockstep {
 
@@ -21,6 +22,8 @@ class AirService final : public ServiceCore {
   void BeginRun(const msg::WorldInfo& world) override;
   void Step(const msg::Tick& tick) override;
   uint64_t StateHash() const override { return air::StateHash(state_); }
+  std::vector<msg::BlueprintDeclaration> Blueprints() const override { return AirBlueprints(); }
+  std::string CheckSpawn(const msg::SpawnActor& spawn) const override { return CheckAirSpawn(spawn); }
   // Without a ground_sim in the run the step reads only the tick: it may run on the
   // receive thread. With one, it waits for the vehicles of frame k-1.
   bool StepNeverWaits() const override { return !wait_for_ground_; }

@@ -11,6 +11,13 @@
  *   - Tick k > last_frame: step (read world state), then Ack{k, state_hash};
  *     Tick k <= last_frame (a re-sent tick): Ack{k} again, no step.
  *
+ * It declares one blueprint of its own on lockstep/blueprints, prop.cyclone.beacon (a prop
+ * with a float attribute "period", s, 0.1..60), and announces that count, so the
+ * coordinator's library holds it while the participant is alive. A spawn of it that the
+ * tick gives to this participant (SpawnActor.owner = its name) gives a line
+ *   own <run> <frame> <actor> <blueprint>
+ * before the tick line. It sets checks_spawns = false: it has no checks of its own.
+ *
  * Per tick it writes one line:
  *   tick <run> <frame> <n_commands> ground_frame=<g> air_frame=<a>
  * where g and a are the newest GroundState / AirState frames of the run seen when the
@@ -33,6 +40,7 @@
 #include <unistd.h>
 
 #include "dds/dds.h"
+#include "lockstep/blueprint.h"
 #include "lockstep/clock.h"
 #include "lockstep/state.h"
 #include "lockstep/world.h"
@@ -61,7 +69,8 @@ typedef struct participant {
   FILE *out;
   dds_entity_t dp;
   dds_entity_t tick_reader, world_reader, done_reader, ground_reader, air_reader;
-  dds_entity_t ack_writer, announce_writer;
+  dds_entity_t ack_writer, announce_writer, blueprint_writer;
+  uint64_t owned_frame;     /* newest frame whose owned spawns were reported */
   dds_entity_t waitset;
 
   bool have_world;
@@ -148,8 +157,37 @@ static void announce(participant *p, lockstep_msg_ServiceState state) {
   a.pid = (int32_t)getpid();
   memcpy(a.host, p->host, sizeof a.host);
   a.last_frame = p->last_frame;
+  a.blueprints = 1; /* declare_blueprints() */
   dds_return_t rc = dds_write(p->announce_writer, &a);
   if (rc < 0) fprintf(stderr, "announce: %s\n", dds_strretcode(rc));
+}
+
+/* Our own actor type, published once before the first announcement. */
+static void declare_blueprints(participant *p) {
+  lockstep_msg_AttributeDeclaration attr;
+  memset(&attr, 0, sizeof attr);
+  snprintf(attr.id, sizeof attr.id, "period");
+  attr.type = lockstep_msg_ATTR_FLOAT;
+  snprintf(attr.default_value, sizeof attr.default_value, "1");
+  attr.min = 0.1;
+  attr.max = 60;
+  attr.restricted = false;
+  attr.modifiable = true;
+  lockstep_msg_BlueprintDeclaration bp;
+  memset(&bp, 0, sizeof bp);
+  snprintf(bp.id, sizeof bp.id, "prop.cyclone.beacon");
+  snprintf(bp.tags, sizeof bp.tags, "prop,cyclone,beacon");
+  bp.kind = lockstep_msg_ACTOR_PROP;
+  bp.attributes._length = bp.attributes._maximum = 1;
+  bp.attributes._buffer = &attr;
+  lockstep_msg_BlueprintSet set;
+  memset(&set, 0, sizeof set);
+  snprintf(set.service, sizeof set.service, "%s", p->opt.name);
+  set.blueprints._length = set.blueprints._maximum = 1;
+  set.blueprints._buffer = &bp;
+  set.checks_spawns = false;
+  dds_return_t rc = dds_write(p->blueprint_writer, &set);
+  if (rc < 0) die("declare blueprints", rc);
 }
 
 static void send_ack(participant *p, uint64_t frame) {
@@ -229,6 +267,15 @@ static void take_tick(participant *p) {
     p->tick_run = t->run;
     p->tick_frame = t->frame;
     p->tick_commands = t->commands._length;
+    if (t->frame <= p->owned_frame && t->run == p->run) continue; /* a re-sent tick */
+    p->owned_frame = t->frame;
+    for (uint32_t j = 0; j < t->commands._length; ++j) {
+      const lockstep_msg_Command *c = &t->commands._buffer[j];
+      if (c->body._d != lockstep_msg_CMD_SPAWN_ACTOR || strcmp(c->body._u.spawn_actor.owner, p->opt.name) != 0) continue;
+      fprintf(p->out, "own %" PRIu32 " %" PRIu64 " %" PRIu32 " %s\n", t->run, t->frame, c->body._u.spawn_actor.actor,
+              c->body._u.spawn_actor.blueprint);
+      fflush(p->out);
+    }
   }
   if (n > 0) dds_return_loan(p->tick_reader, samples, n);
 }
@@ -273,6 +320,7 @@ static void begin_run(participant *p, uint32_t run) {
   p->air_frame = 0;
   p->last_done = 0;
   p->printed_done = 0;
+  p->owned_frame = 0;
 }
 
 static bool join(participant *p) {
@@ -475,6 +523,8 @@ int main(int argc, char **argv) {
    * deploy/qos/fastdds.xml. */
   p.ack_writer = make_writer(&p, &lockstep_msg_Ack_desc, "lockstep/ack", false, 1);
   p.announce_writer = make_writer(&p, &lockstep_msg_ServiceAnnounce_desc, "lockstep/service", true, 1);
+  p.blueprint_writer = make_writer(&p, &lockstep_msg_BlueprintSet_desc, "lockstep/blueprints", true, 1);
+  declare_blueprints(&p);
   p.world_reader = make_reader(&p, &lockstep_msg_WorldInfo_desc, "lockstep/world_info", true, 1);
   p.tick_reader = make_reader(&p, &lockstep_msg_Tick_desc, "lockstep/tick", true, 1);
   p.done_reader = make_reader(&p, &lockstep_msg_FrameDone_desc, "lockstep/frame_done", true, 1);

@@ -1,10 +1,10 @@
 #include "lockstep/coordinator/command_processor.h"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <sstream>
 
-#include "lockstep/air/params.h"
 #include "lockstep/runtime/launch_config.h"
 
 namespace lockstep {
@@ -46,23 +46,6 @@ std::string First(S&&... reasons) {
   return out;
 }
 
-// Builds the drone's parameters as air_sim will, so a bad combination (a vector that
-// does not parse, a negative inertia) is rejected here and not inside the service.
-std::string CheckDroneParams(const std::string& blueprint, const std::vector<msg::BlueprintAttribute>& attributes) {
-  std::map<std::string, std::string> attrs;
-  for (const auto& a : attributes) {
-    if (a.key().to_string() != "role_name") attrs[a.key().to_string()] = a.value().to_string();
-  }
-  if (blueprint == "drone.quad_plus" && !attrs.count("frame")) attrs["frame"] = "quad_plus";
-  if (blueprint == "drone.hexa_x" && !attrs.count("frame")) attrs["frame"] = "hexa_x";
-  try {
-    const std::string why = air::ValidateParams(air::ParamsFromAttributes(attrs));
-    return why.empty() ? why : "drone parameters: " + why;
-  } catch (const std::exception& e) {
-    return std::string("drone parameters: ") + e.what();
-  }
-}
-
 }  // namespace
 
 CommandProcessor::CommandProcessor(BlueprintLibrary library) : library_(std::move(library)) {}
@@ -73,13 +56,13 @@ void CommandProcessor::ResetActors() {
   pending_.clear();
 }
 
-uint32_t CommandProcessor::AddMapActor(const std::string& blueprint, ActorKind kind) {
+uint32_t CommandProcessor::AddMapActor(const std::string& blueprint, msg::ActorKind kind) {
   const uint32_t id = next_actor_++;
-  actors_[id] = ActorRecord{id, blueprint, kind, 0};
+  actors_[id] = ActorRecord{id, blueprint, kind, 0, {}};
   return id;
 }
 
-std::string CommandProcessor::CheckActor(uint32_t id, ActorKind kind) const {
+std::string CommandProcessor::CheckActor(uint32_t id, msg::ActorKind kind) const {
   auto it = actors_.find(id);
   if (it == actors_.end()) return "unknown actor " + std::to_string(id);
   if (it->second.kind != kind) {
@@ -91,7 +74,7 @@ std::string CommandProcessor::CheckActor(uint32_t id, ActorKind kind) const {
 
 std::string CommandProcessor::CheckDrone(const msg::DroneCommand& d) const {
   using K = msg::DroneCommandKind;
-  if (auto r = CheckActor(d.actor(), ActorKind::kDrone); !r.empty()) return r;
+  if (auto r = CheckActor(d.actor(), msg::ACTOR_DRONE); !r.empty()) return r;
   if (!Finite(d.target())) return "drone target has a NaN or infinite value";
   for (const auto& p : d.path()) {
     if (!Finite(p)) return "drone path has a NaN or infinite point";
@@ -169,14 +152,20 @@ std::string CommandProcessor::Check(const msg::Command& cmd, bool synchronous) c
   switch (b._d()) {
     case CommandKind::CMD_SPAWN_ACTOR: {
       const auto& s = b.spawn_actor();
-      const Blueprint* bp = library_.Find(s.blueprint().to_string());
-      if (!bp) return "unknown blueprint '" + s.blueprint().to_string() + "'";
-      if (auto r = library_.Check(*bp, s.attributes()); !r.empty()) return r;
-      if (bp->kind == ActorKind::kDrone) {
-        if (auto r = CheckDroneParams(bp->id, s.attributes()); !r.empty()) return r;
-      }
+      const std::string id = s.blueprint().to_string();
+      const msg::BlueprintDeclaration* bp = library_.Find(id);
+      if (!bp) return library_.WhyUnknown(id);
+      if (auto r = BlueprintLibrary::Check(*bp, s.attributes()); !r.empty()) return r;
       if (auto r = CheckPose(s.transform(), "spawn transform"); !r.empty()) return r;
       if (s.parent() != 0 && !actors_.count(s.parent())) return "unknown parent actor " + std::to_string(s.parent());
+      if (const std::string owner = s.owner().to_string(); !owner.empty()) {
+        const auto declarers = library_.Declarers(id);
+        if (std::find(declarers.begin(), declarers.end(), owner) == declarers.end()) {
+          std::string list;
+          for (const auto& d : declarers) list += (list.empty() ? "'" : ", '") + d + "'";
+          return "owner '" + owner + "' does not declare blueprint '" + id + "' (declared by " + list + ")";
+        }
+      }
       return {};
     }
     case CommandKind::CMD_DESTROY_ACTOR:
@@ -187,26 +176,26 @@ std::string CommandProcessor::Check(const msg::Command& cmd, bool synchronous) c
       return CheckPose(b.set_transform().transform(), "transform");
     case CommandKind::CMD_VEHICLE_CONTROL: {
       const auto& c = b.vehicle_control();
-      return First(CheckActor(c.actor(), ActorKind::kVehicle), InRange("throttle", c.throttle(), 0, 1),
+      return First(CheckActor(c.actor(), msg::ACTOR_VEHICLE), InRange("throttle", c.throttle(), 0, 1),
                    InRange("steer", c.steer(), -1, 1), InRange("brake", c.brake(), 0, 1), InRange("gear", c.gear(), -1, 10));
     }
     case CommandKind::CMD_WALKER_CONTROL: {
       const auto& c = b.walker_control();
       if (!Finite(c.direction())) return "walker direction has a NaN or infinite value";
-      return First(CheckActor(c.actor(), ActorKind::kWalker), InRange("speed", c.speed(), 0, 10));
+      return First(CheckActor(c.actor(), msg::ACTOR_WALKER), InRange("speed", c.speed(), 0, 10));
     }
     case CommandKind::CMD_DRONE:
       return CheckDrone(b.drone());
     case CommandKind::CMD_TRAFFIC_LIGHT: {
       const auto& t = b.traffic_light();
-      return First(CheckActor(t.actor(), ActorKind::kTrafficLight), InRange("green_time", t.green_time(), -1, 3600),
+      return First(CheckActor(t.actor(), msg::ACTOR_TRAFFIC_LIGHT), InRange("green_time", t.green_time(), -1, 3600),
                    InRange("yellow_time", t.yellow_time(), -1, 3600), InRange("red_time", t.red_time(), -1, 3600));
     }
     case CommandKind::CMD_TRAFFIC_MANAGER: {
       using P = msg::TrafficManagerParameter;
       const auto& t = b.traffic_manager();
       if (t.actor() != 0) {
-        if (auto r = CheckActor(t.actor(), ActorKind::kVehicle); !r.empty()) return r;
+        if (auto r = CheckActor(t.actor(), msg::ACTOR_VEHICLE); !r.empty()) return r;
       }
       switch (t.parameter()) {
         case P::TM_AUTOPILOT:
@@ -260,27 +249,50 @@ std::string CommandProcessor::Check(const msg::Command& cmd, bool synchronous) c
   return "unknown command kind";
 }
 
-msg::CommandReply CommandProcessor::Submit(const msg::Command& cmd, uint32_t run, uint64_t next_frame, bool synchronous) {
+std::string CommandProcessor::ChooseOwner(const msg::SpawnActor& spawn) const {
+  if (!spawn.owner().to_string().empty()) return spawn.owner().to_string();
+  std::string best;
+  size_t best_count = 0;
+  for (const auto& name : library_.Declarers(spawn.blueprint().to_string())) {
+    const size_t n = std::count_if(actors_.begin(), actors_.end(), [&](const auto& a) { return a.second.owner == name; });
+    if (best.empty() || n < best_count) {
+      best = name;
+      best_count = n;
+    }
+  }
+  return best;
+}
+
+msg::CommandReply CommandProcessor::Submit(const msg::Command& cmd, uint32_t run, uint64_t next_frame, bool synchronous,
+                                           const OwnerCheck& owner_check) {
   msg::CommandReply reply;
   reply.client(cmd.client());
   reply.sequence_number(cmd.sequence_number());
   reply.run(run);
   reply.frame(next_frame);
   std::string reason = Check(cmd, synchronous);
+  msg::Command accepted = cmd;
+  auto& b = accepted.body();
+  if (reason.empty() && b._d() == CommandKind::CMD_SPAWN_ACTOR) {
+    b.spawn_actor().owner(ChooseOwner(b.spawn_actor()));
+    b.spawn_actor().actor(0);
+    if (owner_check) {
+      reason = owner_check(b.spawn_actor());
+      if (!reason.empty()) reason = "owner '" + b.spawn_actor().owner().to_string() + "' rejected the spawn: " + reason;
+    }
+  }
   if (!reason.empty()) {
     reply.accepted(false);
     reply.reason(reason.substr(0, 511));
     return reply;
   }
   reply.accepted(true);
-  msg::Command accepted = cmd;
-  auto& b = accepted.body();
   switch (b._d()) {
     case CommandKind::CMD_SPAWN_ACTOR: {
       const uint32_t id = next_actor_++;
       b.spawn_actor().actor(id);
-      actors_[id] = ActorRecord{id, b.spawn_actor().blueprint().to_string(), library_.Find(b.spawn_actor().blueprint().to_string())->kind,
-                                b.spawn_actor().parent()};
+      actors_[id] = ActorRecord{id, b.spawn_actor().blueprint().to_string(), library_.Find(b.spawn_actor().blueprint().to_string())->kind(),
+                                b.spawn_actor().parent(), b.spawn_actor().owner().to_string()};
       reply.actor(id);
       break;
     }

@@ -92,7 +92,7 @@ msg::WeatherParameters DefaultWeather() {
 }  // namespace
 
 struct Coordinator::Impl {
-  Impl(Bus& b, LaunchConfig c) : bus(b), config(std::move(c)), commands(BlueprintLibrary::Default()) {}
+  Impl(Bus& b, LaunchConfig c) : bus(b), config(std::move(c)) {}
 
   Bus& bus;
   LaunchConfig config;
@@ -144,6 +144,11 @@ struct Coordinator::Impl {
   Writer<msg::RunStatus> status_writer;
   Writer<msg::FrameDone> done_writer;
   Writer<msg::CommandReply> reply_writer;
+  Writer<msg::SpawnCheck> check_writer;
+  std::map<uint64_t, msg::SpawnCheckReply> check_replies;  // by request id
+  uint64_t next_check = 0;
+  bool checking = false;                       // the main loop waits for an owner's spawn check
+  std::unique_lock<std::mutex>* main_lock = nullptr;  // the main loop's lock on `mu`, while it runs
   // DDS writes happen with `mu` released: a middleware thread may be waiting on
   // `mu` in a callback while a write needs that thread's progress.
   std::vector<std::function<void()>> outbox;
@@ -163,6 +168,8 @@ struct Coordinator::Impl {
   Reader<msg::Ack> ack_reader;
   Reader<msg::ServiceAnnounce> service_reader;
   Reader<msg::Command> command_reader;
+  Reader<msg::BlueprintSet> blueprint_reader;
+  Reader<msg::SpawnCheckReply> check_reply_reader;
 
   // --- callbacks (middleware threads) ---
   void OnAck(const msg::Ack& a) {
@@ -192,7 +199,14 @@ struct Coordinator::Impl {
   // The main loop's decisions would be "complete this tick, start the next one".
   bool CanChainTick() const {
     return state == RunState::RUN_RUNNING && !settings.synchronous_mode() && settings.real_time_factor() == 0 &&
-           inbox.empty() && !status_dirty && (config.ticks == 0 || open_tick.frame() + 1 < config.ticks);
+           inbox.empty() && !status_dirty && !checking && !ScheduledDue(open_tick.frame() + 1) &&
+           (config.ticks == 0 || open_tick.frame() + 1 < config.ticks);
+  }
+
+  // The scenario has commands for `for_frame`: its tick starts on the main loop, which
+  // may wait for an owner's spawn check.
+  bool ScheduledDue(uint64_t for_frame) const {
+    return next_scheduled < config.scenario.size() && config.scenario[next_scheduled].frame <= for_frame;
   }
 
   void FlushFromCallback() {
@@ -206,6 +220,58 @@ struct Coordinator::Impl {
       if (members.OnAnnounce(a, Clock::now())) status_dirty = true;
     }
     cv.notify_one();
+  }
+
+  void OnBlueprints(const msg::BlueprintSet& set) {
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      const std::string name = set.service().to_string();
+      commands.library().Declare(set);
+      spdlog::info("service '{}' declares {} blueprint(s)", name, set.blueprints().size());
+      if (members.OnBlueprints(name, static_cast<long>(set.blueprints().size()))) status_dirty = true;
+    }
+    cv.notify_one();
+  }
+
+  void OnCheckReply(const msg::SpawnCheckReply& r) {
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      check_replies[r.request()] = r;
+    }
+    cv.notify_one();
+  }
+
+  // The library counts the declarations of alive members only.
+  void SyncLibrary() {
+    commands.library().UpdateAlive([&](const std::string& service) {
+      const Member* m = members.Find(service);
+      return m != nullptr && m->alive;
+    });
+  }
+
+  // Asks the owner of `spawn` to check it (blueprint.idl: SpawnCheck) and waits for the
+  // answer, at most service_timeout. Runs on the main loop only: `mu` is released while
+  // it waits, and `checking` keeps the ack callbacks from starting ticks meanwhile.
+  std::string AskOwner(const msg::SpawnActor& spawn) {
+    const std::string owner = spawn.owner().to_string();
+    if (!commands.library().ChecksSpawns(owner) || main_lock == nullptr) return {};
+    msg::SpawnCheck c;
+    c.service(owner);
+    c.request(++next_check);
+    c.run(run);
+    c.spawn(spawn);
+    const uint64_t id = c.request();
+    checking = true;
+    Post(check_writer, std::move(c));
+    Flush(*main_lock);
+    const double timeout = settings.service_timeout();
+    const bool answered = cv.wait_until(*main_lock, Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(timeout)),
+                                        [&] { return check_replies.count(id) > 0; });
+    checking = false;
+    if (!answered) return "no answer to the spawn check within " + std::to_string(timeout) + " s";
+    const msg::SpawnCheckReply r = check_replies[id];
+    check_replies.erase(id);
+    return r.accepted() ? std::string() : r.reason().to_string();
   }
 
   void OnCommand(const msg::Command& c) {
@@ -251,7 +317,7 @@ struct Coordinator::Impl {
   // Actors every run starts with: the map's traffic lights, ids 1..n in signal order
   // (ground_sim derives the same order from the same map).
   void RegisterMapActors() {
-    for (size_t i = 0; i < map_traffic_lights; ++i) commands.AddMapActor("traffic.traffic_light", ActorKind::kTrafficLight);
+    for (size_t i = 0; i < map_traffic_lights; ++i) commands.AddMapActor("traffic.traffic_light", msg::ACTOR_TRAFFIC_LIGHT);
   }
 
   void PublishStatus(Clock::time_point now) {
@@ -367,7 +433,9 @@ struct Coordinator::Impl {
           continue;
         }
       }
-      reply = commands.Submit(c, run, frame + 1 + (barrier.open() ? 1 : 0), settings.synchronous_mode());
+      SyncLibrary();
+      reply = commands.Submit(c, run, frame + 1 + (barrier.open() ? 1 : 0), settings.synchronous_mode(),
+                              [this](const msg::SpawnActor& s) { return AskOwner(s); });
       if (reply.accepted()) {
         switch (kind) {
           case msg::CommandKind::CMD_TICK:
@@ -445,7 +513,9 @@ struct Coordinator::Impl {
         }
         if (c.body()._d() == msg::CommandKind::CMD_DRONE) c.body().drone().actor(it->second);
       }
-      msg::CommandReply r = commands.Submit(c, run, for_frame, settings.synchronous_mode());
+      SyncLibrary();
+      msg::CommandReply r = commands.Submit(c, run, for_frame, settings.synchronous_mode(),
+                                            [this](const msg::SpawnActor& s) { return AskOwner(s); });
       if (!r.accepted()) {
         spdlog::error("scenario step {} at frame {} rejected: {}", c.sequence_number(), for_frame, r.reason().to_string());
         continue;
@@ -514,6 +584,7 @@ Coordinator::Coordinator(Bus& bus, LaunchConfig config) : impl_(std::make_unique
   s.status_writer = Writer<msg::RunStatus>(bus, topics::kRunStatus);
   s.done_writer = Writer<msg::FrameDone>(bus, topics::kFrameDone);
   s.reply_writer = Writer<msg::CommandReply>(bus, topics::kCommandReply);
+  s.check_writer = Writer<msg::SpawnCheck>(bus, topics::kSpawnCheck);
   {
     std::unique_lock<std::mutex> lock(s.mu);
     s.PublishWorld();
@@ -524,6 +595,10 @@ Coordinator::Coordinator(Bus& bus, LaunchConfig config) : impl_(std::make_unique
   s.service_reader = Reader<msg::ServiceAnnounce>(bus, topics::kService,
                                                   [&s](const msg::ServiceAnnounce& a, const SampleInfo&) { s.OnAnnounce(a); });
   s.command_reader = Reader<msg::Command>(bus, topics::kCommand, [&s](const msg::Command& c, const SampleInfo&) { s.OnCommand(c); });
+  s.blueprint_reader = Reader<msg::BlueprintSet>(bus, topics::kBlueprints,
+                                                 [&s](const msg::BlueprintSet& b, const SampleInfo&) { s.OnBlueprints(b); });
+  s.check_reply_reader = Reader<msg::SpawnCheckReply>(bus, topics::kSpawnCheckReply,
+                                                      [&s](const msg::SpawnCheckReply& r, const SampleInfo&) { s.OnCheckReply(r); });
 }
 
 Coordinator::~Coordinator() = default;
@@ -544,6 +619,7 @@ CoordinatorStats Coordinator::stats() const {
 int Coordinator::Run(const std::atomic<bool>& stop) {
   auto& s = *impl_;
   std::unique_lock<std::mutex> lock(s.mu);
+  s.main_lock = &lock;
   spdlog::info("coordinator on {}: waiting for {} required service(s)", s.bus.Describe(), s.config.RequiredServices().size());
   s.next_tick_at = Clock::now();
   while (!stop) {
@@ -580,6 +656,7 @@ int Coordinator::Run(const std::atomic<bool>& stop) {
           s.PublishStatus(now);
           s.Flush(lock);
           s.LogSummary(now);
+          s.main_lock = nullptr;
           lock.unlock();
           s.DrainWriters();
           return 0;
@@ -636,6 +713,7 @@ int Coordinator::Run(const std::atomic<bool>& stop) {
   s.PublishStatus(Clock::now());
   s.Flush(lock);
   s.LogSummary(Clock::now());
+  s.main_lock = nullptr;
   lock.unlock();
   s.DrainWriters();
   return 0;

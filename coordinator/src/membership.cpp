@@ -15,13 +15,23 @@ bool Membership::OnAnnounce(const msg::ServiceAnnounce& a, Clock::time_point now
   bool changed = false;
   m.kind = a.kind().to_string();
   m.last_heard = now;
+  m.blueprints = a.blueprints();
+  m.host = a.host().to_string();
+  m.announced_frame = a.last_frame();
+  m.ready_announced = a.state() == msg::ServiceState::SERVICE_READY;
   if (m.stalled_frame != 0 && m.pid != a.pid()) m.stalled_frame = 0;  // a replacement process
   if (a.state() == msg::ServiceState::SERVICE_READY && m.stalled_frame != 0) {
     // Heartbeats alone do not clear a stall: the service must finish the frame.
+  } else if (a.state() == msg::ServiceState::SERVICE_READY && m.blueprints != 0 &&
+             m.blueprints_received != static_cast<long>(m.blueprints)) {
+    // Ready, but its declarations have not arrived: not alive yet (OnBlueprints).
+    changed = m.alive;
+    m.alive = false;
   } else if (a.state() == msg::ServiceState::SERVICE_READY) {
     if (!m.alive) {
       changed = true;
-      spdlog::info("service '{}' ({}, pid {} on {}) joined at frame {}", name, m.kind, a.pid(), a.host().to_string(), a.last_frame());
+      spdlog::info("service '{}' ({}, pid {} on {}) joined at frame {} with {} blueprint(s)", name, m.kind, a.pid(),
+                   a.host().to_string(), a.last_frame(), m.blueprints);
     }
     m.ready = true;
     m.alive = true;
@@ -57,12 +67,27 @@ bool Membership::OnAck(const std::string& service, uint32_t current_run, const m
   return changed;
 }
 
+bool Membership::OnBlueprints(const std::string& service, long count) {
+  Member& m = members_[service];
+  m.blueprints_received = count;
+  if (m.ready_announced && !m.alive && m.stalled_frame == 0 && count == static_cast<long>(m.blueprints)) {
+    m.ready = true;
+    m.alive = true;
+    m.failure.clear();
+    spdlog::info("service '{}' ({}, pid {} on {}) joined at frame {} with {} blueprint(s)", service, m.kind, m.pid, m.host,
+                 m.announced_frame, count);
+    return true;
+  }
+  return false;
+}
+
 bool Membership::CheckHeartbeats(Clock::time_point now) {
   bool changed = false;
   for (auto& [name, m] : members_) {
     if (!m.alive || now - m.last_heard <= heartbeat_timeout_) continue;
     m.alive = false;
     m.ready = false;
+    m.ready_announced = false;
     m.failure = "sent no heartbeat for " +
                 std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(now - m.last_heard).count()) +
                 " ms (crashed, hung or stopped; pid " + std::to_string(m.pid) + ")";

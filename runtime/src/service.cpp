@@ -42,6 +42,8 @@ struct ServiceRunner::Impl {
   std::optional<msg::ServiceSnapshot> snapshot;  // our own last snapshot, for a replacement
   std::optional<msg::TickLog> tick_log;          // the run's ticks, published when we failed
   std::optional<msg::RunStatus> status;          // the coordinator's latest run status
+  std::deque<msg::SpawnCheck> checks;            // spawn checks for us, answered between steps
+  const std::vector<msg::BlueprintDeclaration> blueprints = core.Blueprints();
 
   std::atomic<uint32_t> run{0};
   std::atomic<uint64_t> last_frame{0};
@@ -52,6 +54,9 @@ struct ServiceRunner::Impl {
   Writer<msg::Ack> ack;
   Writer<msg::ServiceAnnounce> announce;
   Writer<msg::ServiceSnapshot> snapshot_writer;
+  Writer<msg::BlueprintSet> blueprint_writer;
+  Writer<msg::SpawnCheckReply> check_reply_writer;
+  Reader<msg::SpawnCheck> check_reader;
   Reader<msg::Tick> tick_reader;
   Reader<msg::WorldInfo> world_reader;
   Reader<msg::ServiceSnapshot> snapshot_reader;
@@ -67,7 +72,41 @@ struct ServiceRunner::Impl {
     a.pid(static_cast<int32_t>(getpid()));
     a.host(host);
     a.last_frame(last_frame);
+    a.blueprints(static_cast<uint32_t>(blueprints.size()));
     announce.Write(a);
+  }
+
+  void PublishBlueprints() {
+    msg::BlueprintSet set;
+    set.service(options.name);
+    set.blueprints(blueprints);
+    set.checks_spawns(!blueprints.empty());
+    blueprint_writer.Write(set);
+  }
+
+  // Answers the spawn checks queued for us (called with step_mu held, never during a step).
+  void AnswerChecks() {
+    for (;;) {
+      msg::SpawnCheck c;
+      {
+        std::lock_guard<std::mutex> lock(mu);
+        if (checks.empty()) return;
+        c = std::move(checks.front());
+        checks.pop_front();
+      }
+      std::string why;
+      try {
+        why = core.CheckSpawn(c.spawn());
+      } catch (const std::exception& e) {
+        why = std::string("the spawn check threw: ") + e.what();
+      }
+      msg::SpawnCheckReply r;
+      r.service(options.name);
+      r.request(c.request());
+      r.accepted(why.empty());
+      r.reason(why.substr(0, 511));
+      check_reply_writer.Write(r);
+    }
   }
 
   void SendAck(uint64_t frame, double wall_us) {
@@ -244,6 +283,16 @@ ServiceRunner::ServiceRunner(Bus& bus, ServiceOptions options, ServiceCore& core
   s.ack = Writer<msg::Ack>(bus, topics::kAck);
   s.announce = Writer<msg::ServiceAnnounce>(bus, topics::kService);
   s.snapshot_writer = Writer<msg::ServiceSnapshot>(bus, topics::kSnapshot);
+  s.blueprint_writer = Writer<msg::BlueprintSet>(bus, topics::kBlueprints);
+  s.check_reply_writer = Writer<msg::SpawnCheckReply>(bus, topics::kSpawnCheckReply);
+  s.check_reader = Reader<msg::SpawnCheck>(bus, topics::kSpawnCheck, [&s](const msg::SpawnCheck& c, const SampleInfo&) {
+    if (c.service() != s.options.name) return;
+    {
+      std::lock_guard<std::mutex> lock(s.mu);
+      s.checks.push_back(c);
+    }
+    s.cv.notify_all();
+  });
   s.snapshot_reader = Reader<msg::ServiceSnapshot>(bus, topics::kSnapshot, [&s](const msg::ServiceSnapshot& snap, const SampleInfo& info) {
     if (snap.service() != s.options.name || info.writer_id == s.snapshot_writer.id()) return;
     std::lock_guard<std::mutex> lock(s.mu);
@@ -293,6 +342,8 @@ ServiceRunner::ServiceRunner(Bus& bus, ServiceOptions options, ServiceCore& core
     }
     s.cv.notify_one();
   });
+  // Declarations first: the announcement counts them, and the coordinator waits for them.
+  s.PublishBlueprints();
   s.Announce(msg::ServiceState::SERVICE_STARTING);
 }
 
@@ -326,13 +377,20 @@ void ServiceRunner::Run(const std::atomic<bool>& stop) {
       std::optional<msg::Tick> tick;
       {
         std::unique_lock<std::mutex> lock(s.mu);
-        s.cv.wait_for(lock, std::chrono::milliseconds(100), [&] { return !s.ticks.empty() || stop; });
-        if (s.ticks.empty()) continue;
+        s.cv.wait_for(lock, std::chrono::milliseconds(100), [&] { return !s.ticks.empty() || !s.checks.empty() || stop; });
+        if (s.ticks.empty()) {
+          if (s.checks.empty()) continue;
+          lock.unlock();
+          std::lock_guard<std::mutex> step(s.step_mu);
+          s.AnswerChecks();
+          continue;
+        }
         tick = std::move(s.ticks.front());
         s.ticks.pop_front();
       }
       std::lock_guard<std::mutex> step(s.step_mu);
       s.Handle(*tick, stop);
+      s.AnswerChecks();
     }
   } catch (const Stopped&) {
     // Asked to stop while waiting: a normal end.

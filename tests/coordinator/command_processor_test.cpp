@@ -1,10 +1,13 @@
 #include "lockstep/coordinator/command_processor.h"
+#include "lockstep/runtime/blueprint_builder.h"
 #include "lockstep/runtime/command_builders.h"
+#include "stand_in_blueprints.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <limits>
+#include <map>
 
 namespace lockstep {
 namespace {
@@ -31,10 +34,23 @@ msg::Command Control(uint32_t actor, float throttle, float steer) {
   return Make(b);
 }
 
+msg::BlueprintSet Declare(const std::string& service, std::vector<msg::BlueprintDeclaration> blueprints) {
+  msg::BlueprintSet set;
+  set.service(service);
+  set.blueprints(std::move(blueprints));
+  return set;
+}
+
 class CommandProcessorTest : public ::testing::Test {
  protected:
-  CommandProcessor p{BlueprintLibrary::Default()};
-  msg::CommandReply Submit(const msg::Command& c, bool sync = false) { return p.Submit(c, 1, 10, sync); }
+  CommandProcessorTest() {
+    p.library().Declare(Declare("ground", testing::StandInBlueprints()));
+    p.library().Declare(Declare("air", {blueprint::Make("drone.generic_quad", msg::ACTOR_DRONE, {blueprint::String("role_name", "")})}));
+  }
+  CommandProcessor p;
+  msg::CommandReply Submit(const msg::Command& c, bool sync = false, const OwnerCheck& check = {}) {
+    return p.Submit(c, 1, 10, sync, check);
+  }
 };
 
 TEST_F(CommandProcessorTest, SpawnAssignsIncreasingActorIds) {
@@ -66,11 +82,71 @@ TEST_F(CommandProcessorTest, AttributeOfWrongTypeIsRejected) {
   EXPECT_FALSE(f.accepted()) << "overflowing float";
   auto rgb = Submit(Spawn("vehicle.lockstep.sedan", {{"color", "255,0"}}));
   EXPECT_FALSE(rgb.accepted());
+  auto fixed = Submit(Spawn("sensor.other.obstacle", {{"generation", "3"}}));
+  EXPECT_FALSE(fixed.accepted());
+  EXPECT_NE(fixed.reason().to_string().find("'generation' of blueprint 'sensor.other.obstacle' cannot be set"), std::string::npos)
+      << fixed.reason();
   auto unknown = Submit(Spawn("vehicle.lockstep.sedan", {{"colour", "1,2,3"}}));
   EXPECT_FALSE(unknown.accepted());
   EXPECT_NE(unknown.reason().to_string().find("no attribute 'colour'"), std::string::npos) << unknown.reason();
   auto ok = Submit(Spawn("vehicle.lockstep.sedan", {{"color", "255,0,10"}, {"role_name", "hero"}}));
   EXPECT_TRUE(ok.accepted()) << ok.reason();
+}
+
+TEST_F(CommandProcessorTest, RestrictedValuesMustBeAmongTheRecommended) {
+  p.library().Declare(Declare("air", {blueprint::Make("drone.generic_quad", msg::ACTOR_DRONE,
+                                                      {blueprint::String("frame", "quad_x", {"quad_x", "hexa_x"}, true)})}));
+  auto bad = Submit(Spawn("drone.generic_quad", {{"frame", "octo"}}));
+  EXPECT_FALSE(bad.accepted());
+  EXPECT_NE(bad.reason().to_string().find("expected one of quad_x, hexa_x"), std::string::npos) << bad.reason();
+  EXPECT_TRUE(Submit(Spawn("drone.generic_quad", {{"frame", "hexa_x"}})).accepted());
+}
+
+TEST_F(CommandProcessorTest, TheTickNamesTheOwnerAndSpawnsAreBalancedAmongDeclarers) {
+  p.library().Declare(Declare("render_a", {blueprint::Make("sensor.camera.rgb", msg::ACTOR_SENSOR, {})}));
+  p.library().Declare(Declare("render_b", {blueprint::Make("sensor.camera.rgb", msg::ACTOR_SENSOR, {})}));
+  p.library().SetAlive("ground", false);  // ground also declares cameras: only the two renders count
+  std::map<std::string, int> owners;
+  for (int i = 0; i < 6; ++i) ASSERT_TRUE(Submit(Spawn("sensor.camera.rgb")).accepted());
+  for (const auto& c : p.TakePending()) ++owners[c.body().spawn_actor().owner().to_string()];
+  EXPECT_EQ(owners["render_a"], 3);
+  EXPECT_EQ(owners["render_b"], 3);
+  auto named = Spawn("sensor.camera.rgb");
+  named.body().spawn_actor().owner("render_b");
+  ASSERT_TRUE(Submit(named).accepted());
+  EXPECT_EQ(p.TakePending().at(0).body().spawn_actor().owner().to_string(), "render_b") << "the spawn may name its owner";
+  named.body().spawn_actor().owner("air");
+  auto wrong = Submit(named);
+  EXPECT_FALSE(wrong.accepted());
+  EXPECT_NE(wrong.reason().to_string().find("owner 'air' does not declare blueprint 'sensor.camera.rgb'"), std::string::npos)
+      << wrong.reason();
+}
+
+TEST_F(CommandProcessorTest, ABlueprintLeavesWithItsService) {
+  ASSERT_TRUE(Submit(Spawn("drone.generic_quad")).accepted());
+  p.library().SetAlive("air", false);
+  auto r = Submit(Spawn("drone.generic_quad"));
+  EXPECT_FALSE(r.accepted());
+  EXPECT_NE(r.reason().to_string().find("unknown blueprint 'drone.generic_quad': declared only by 'air', which is not alive"),
+            std::string::npos)
+      << r.reason();
+  auto never = Submit(Spawn("drone.imaginary"));
+  EXPECT_NE(never.reason().to_string().find("no live service declares it"), std::string::npos) << never.reason();
+}
+
+TEST_F(CommandProcessorTest, TheOwnersCheckDecidesTheReply) {
+  std::vector<std::string> asked;
+  auto check = [&](const msg::SpawnActor& s) -> std::string {
+    asked.push_back(s.owner().to_string());
+    return s.attributes().empty() ? "" : "mass too small for its motors";
+  };
+  auto bad = Submit(Spawn("drone.generic_quad", {{"role_name", "x"}}), false, check);
+  EXPECT_FALSE(bad.accepted());
+  EXPECT_EQ(bad.reason().to_string(), "owner 'air' rejected the spawn: mass too small for its motors");
+  EXPECT_EQ(bad.actor(), 0u);
+  EXPECT_FALSE(p.HasPending()) << "a spawn its owner rejects never reaches a tick";
+  EXPECT_TRUE(Submit(Spawn("drone.generic_quad"), false, check).accepted());
+  EXPECT_EQ(asked, (std::vector<std::string>{"air", "air"}));
 }
 
 TEST_F(CommandProcessorTest, ControlOfUnknownActorIsRejected) {

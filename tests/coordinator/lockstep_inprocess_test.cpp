@@ -11,9 +11,11 @@
 #include <thread>
 
 #include "lockstep/coordinator/coordinator.h"
+#include "lockstep/runtime/blueprint_builder.h"
 #include "lockstep/runtime/noop_core.h"
 #include "lockstep/runtime/service.h"
 #include "observer.h"
+#include "stand_in_blueprints.h"
 
 namespace lockstep {
 namespace {
@@ -30,7 +32,10 @@ struct Ledger {
 
 class RecordingCore : public NoopCore {
  public:
-  RecordingCore(std::string name, Ledger& ledger, std::vector<std::string> all) : name_(std::move(name)), ledger_(ledger), all_(std::move(all)) {}
+  // The first service declares the stand-in vehicles, walkers and sensors.
+  RecordingCore(std::string name, Ledger& ledger, std::vector<std::string> all)
+      : NoopCore(name == all.front() ? testing::StandInBlueprints() : std::vector<msg::BlueprintDeclaration>{}),
+        name_(std::move(name)), ledger_(ledger), all_(std::move(all)) {}
   void Step(const msg::Tick& tick) override {
     {
       std::lock_guard<std::mutex> lock(ledger_.mu);
@@ -96,6 +101,13 @@ class InProcessLockstep : public ::testing::Test {
     return c;
   }
   uint32_t SpawnCar() {
+    // The library holds what live services declare: wait until the declarer has joined.
+    EXPECT_TRUE(observer_->WaitUntil(
+        [&] {
+          auto st = observer_->status();
+          return st && (st->state() == msg::RunState::RUN_RUNNING || st->state() == msg::RunState::RUN_READY);
+        },
+        10s));
     msg::SpawnActor s;
     s.blueprint("vehicle.lockstep.sedan");
     s.transform().orientation().w(1);
@@ -346,6 +358,107 @@ TEST_F(InProcessLockstep, LoadMapChecksTheMapAndItsTrafficLightsBecomeActors) {
   auto wrong = observer_->WaitReply(observer_->Send(lb), 10s);
   ASSERT_TRUE(wrong);
   EXPECT_FALSE(wrong->accepted());
+}
+
+}  // namespace
+}  // namespace lockstep
+
+namespace lockstep {
+namespace {
+
+using namespace std::chrono_literals;
+
+// A service that declares one blueprint, checks its spawns itself (a box may not be
+// larger than 10 m) and records the spawns the ticks give it to own.
+class BoxCore : public NoopCore {
+ public:
+  BoxCore()
+      : NoopCore({blueprint::Make("prop.test.box", msg::ACTOR_PROP,
+                                  {blueprint::Float("size", 1, 0, 100), blueprint::String("role_name", "")})}) {}
+  std::string CheckSpawn(const msg::SpawnActor& spawn) const override {
+    for (const auto& a : spawn.attributes()) {
+      if (a.key().to_string() == "size" && std::stod(a.value().to_string()) > 10) return "a box of " + a.value().to_string() + " m is too big";
+    }
+    return {};
+  }
+  void Step(const msg::Tick& tick) override {
+    for (const auto& c : tick.commands()) {
+      if (c.body()._d() != msg::CommandKind::CMD_SPAWN_ACTOR) continue;
+      std::lock_guard<std::mutex> lock(mu);
+      owners[c.body().spawn_actor().actor()] = c.body().spawn_actor().owner().to_string();
+    }
+    NoopCore::Step(tick);
+  }
+  std::mutex mu;
+  std::map<uint32_t, std::string> owners;  // spawned actor -> owner named in the tick
+};
+
+msg::CommandBody SpawnBox(const std::string& size) {
+  msg::SpawnActor s;
+  s.blueprint("prop.test.box");
+  s.transform().orientation().w(1);
+  msg::BlueprintAttribute a;
+  a.key("size");
+  a.value(size);
+  s.attributes({a});
+  msg::CommandBody b;
+  b.spawn_actor(s);
+  return b;
+}
+
+// The declaring service is not required: it joins and leaves while the run goes on.
+TEST(BlueprintDeclarations, TheOwnerChecksASpawnBeforeTheSingleReplyAndLeavingTakesItsBlueprints) {
+  LaunchConfig c;
+  c.world = DefaultWorldSettings();
+  c.world.service_timeout(30);
+  c.services.push_back({"clock", "noop", "", {}, true, false, "never"});
+  auto bus = CreateInProcessBus();
+  testing::Observer obs(*bus);
+  Coordinator coordinator(*bus, c);
+  NoopCore clock;
+  ServiceRunner r1(*bus, ServiceOptions{"clock", "noop", false}, clock);
+  BoxCore boxes;
+  auto r2 = std::make_unique<ServiceRunner>(*bus, ServiceOptions{"boxes", "box", false}, boxes);
+  std::atomic<bool> stop{false}, stop_boxes{false};
+  std::thread t1([&] { r1.Run(stop); });
+  std::thread t2([&] { r2->Run(stop_boxes); });
+  std::thread tc([&] { coordinator.Run(stop); });
+  auto boxes_alive = [&] {
+    auto s = obs.status();
+    if (!s) return false;
+    for (const auto& m : s->members()) {
+      if (m.service().to_string() == "boxes") return m.alive();
+    }
+    return false;
+  };
+  ASSERT_TRUE(obs.WaitUntil(boxes_alive, 10s));
+
+  auto big = obs.WaitReply(obs.Send(SpawnBox("12")), 10s);
+  ASSERT_TRUE(big);
+  EXPECT_FALSE(big->accepted());
+  EXPECT_EQ(big->reason().to_string(), "owner 'boxes' rejected the spawn: a box of 12 m is too big");
+  auto ok = obs.WaitReply(obs.Send(SpawnBox("2")), 10s);
+  ASSERT_TRUE(ok);
+  ASSERT_TRUE(ok->accepted()) << ok->reason();
+  const uint32_t id = ok->actor();
+  ASSERT_TRUE(obs.WaitUntil([&] { return obs.last_frame() >= ok->frame(); }, 10s));
+  {
+    std::lock_guard<std::mutex> lock(boxes.mu);
+    ASSERT_EQ(boxes.owners.size(), 1u) << "only the accepted spawn reaches the ticks";
+    EXPECT_EQ(boxes.owners[id], "boxes") << "the tick names the owner";
+  }
+
+  stop_boxes = true;
+  t2.join();
+  r2.reset();  // announces that it stops
+  ASSERT_TRUE(obs.WaitUntil([&] { return !boxes_alive(); }, 10s));
+  auto gone = obs.WaitReply(obs.Send(SpawnBox("2")), 10s);
+  ASSERT_TRUE(gone);
+  EXPECT_FALSE(gone->accepted());
+  EXPECT_NE(gone->reason().to_string().find("declared only by 'boxes', which is not alive"), std::string::npos) << gone->reason();
+  stop = true;
+  tc.join();
+  t1.join();
 }
 
 }  // namespace

@@ -99,5 +99,25 @@ TEST(Membership, AnAnnouncedShutdownIsAFailureWithItsReason) {
   EXPECT_EQ(m.FirstMissing(&who), "stopped (announced shutdown)");
 }
 
+TEST(Membership, AServiceIsAliveOnlyOnceItsDeclarationsArrived) {
+  Membership m({"air"}, 600ms);
+  const auto t0 = Clock::now();
+  auto ready = Announce("air", msg::ServiceState::SERVICE_READY, 10);
+  ready.blueprints(3);
+  m.OnAnnounce(ready, t0);
+  std::string who;
+  EXPECT_FALSE(m.FirstMissing(&who).empty()) << "ready, but the library does not hold its blueprints yet";
+  EXPECT_TRUE(m.OnBlueprints("air", 3));
+  EXPECT_EQ(m.FirstMissing(&who), "");
+  // It dies; the set of the dead process must not make it alive again.
+  EXPECT_TRUE(m.CheckHeartbeats(t0 + 700ms));
+  EXPECT_FALSE(m.OnBlueprints("air", 3));
+  EXPECT_FALSE(m.FirstMissing(&who).empty());
+  // The replacement announces ready again with its set already here.
+  ready.pid(11);
+  EXPECT_TRUE(m.OnAnnounce(ready, t0 + 800ms));
+  EXPECT_EQ(m.FirstMissing(&who), "");
+}
+
 }  // namespace
 }  // namespace lockstep

@@ -187,6 +187,36 @@ TEST(CycloneParticipant, JoinsTheFastDdsBarrierAndReadsWorldState) {
       },
       10s))
       << diagnostics();
+
+  // (d) Its own blueprint: the participant declares prop.cyclone.beacon; a client spawns
+  // one, the coordinator checks it against the declaration, and the tick hands it to the
+  // participant as its owner.
+  auto beacon = [](const std::string& period) {
+    msg::SpawnActor sp;
+    sp.blueprint("prop.cyclone.beacon");
+    sp.transform().orientation().w(1);
+    msg::BlueprintAttribute a;
+    a.key("period");
+    a.value(period);
+    sp.attributes({a});
+    msg::CommandBody b;
+    b.spawn_actor(sp);
+    return b;
+  };
+  auto too_long = observer.WaitReply(observer.Send(beacon("100")), 10s);
+  ASSERT_TRUE(too_long) << diagnostics();
+  EXPECT_FALSE(too_long->accepted());
+  EXPECT_NE(too_long->reason().to_string().find("attribute 'period' (float): out of range [0.1, 60]"), std::string::npos)
+      << too_long->reason();
+  auto spawned = observer.WaitReply(observer.Send(beacon("2.5")), 10s);
+  ASSERT_TRUE(spawned) << diagnostics();
+  ASSERT_TRUE(spawned->accepted()) << spawned->reason();
+  const std::string own = "own 1 " + std::to_string(spawned->frame()) + " " + std::to_string(spawned->actor()) + " prop.cyclone.beacon";
+  ASSERT_TRUE(observer.WaitUntil([&] { return !Lines(ReadFile(ticks_file), own).empty(); }, 10s))
+      << "expected '" << own << "'\n" << diagnostics();
+  const uint64_t spawn_frame = spawned->frame();
+  ASSERT_TRUE(observer.WaitUntil([&] { return observer.last_frame() >= spawn_frame + 1; }, 10s)) << diagnostics();
+
   coordinator.Signal(SIGINT);
   ASSERT_EQ(coordinator.Wait(10s), std::optional<int>(0)) << diagnostics();
   cyc.Signal(SIGTERM);
@@ -205,7 +235,7 @@ TEST(CycloneParticipant, JoinsTheFastDdsBarrierAndReadsWorldState) {
     const TickLine t = Parse(ticks[k - 1]);
     EXPECT_EQ(t.run, 1u);
     ASSERT_EQ(t.frame, k) << "frames missing, out of order or repeated:\n" << out;
-    EXPECT_EQ(t.commands, 0u);
+    EXPECT_EQ(t.commands, t.frame == spawn_frame ? 1u : 0u) << "only the accepted spawn reaches a tick";
     // (c) World state. state_pub wrote state k-1 before acking k-1, and tick k starts only
     // after that ack, but DDS orders samples per writer only, so the participant waits for
     // state k-1 (--wait-state) before stepping k. State k may already be there, never k+1.

@@ -19,11 +19,16 @@ struct Member {
   bool alive = false;          // ready and heard from within the heartbeat timeout
   uint64_t stalled_frame = 0;  // missed the per-tick timeout on this frame: alive again only once it acks it
   int32_t pid = 0;
+  std::string host;
+  uint64_t announced_frame = 0;  // last_frame in its last announcement
   std::chrono::steady_clock::time_point last_heard;  // last announcement
   uint64_t last_frame = 0;     // last frame acked in the current run
   uint64_t last_hash = 0;      // state hash acked with last_frame
   double last_step_us = 0;     // wall time of its last step
   std::string failure;         // why it is not alive, if it failed
+  uint32_t blueprints = 0;     // how many it says it declared (ServiceAnnounce.blueprints)
+  long blueprints_received = -1;  // how many its BlueprintSet holds; -1: none arrived yet
+  bool ready_announced = false;   // its last announcement said READY
 };
 
 class Membership {
@@ -34,6 +39,9 @@ class Membership {
   // Each returns true when something a status report shows has changed.
   bool OnAnnounce(const msg::ServiceAnnounce& a, Clock::time_point now);
   bool OnAck(const std::string& service, uint32_t current_run, const msg::Ack& a);
+  // Its BlueprintSet arrived with `count` declarations. A member that announced READY
+  // is alive only once the set it announced is here (the library must hold its blueprints).
+  bool OnBlueprints(const std::string& service, long count);
   // Marks members silent for longer than the timeout as dead (crashed or stopped).
   bool CheckHeartbeats(Clock::time_point now);
   // A member that did not finish `frame` in time; it stays dead until it acks it.

@@ -12,7 +12,7 @@
 
 #define LOCKSTEP_MESSAGE_TYPES(X)                                                        \
   X(Tick) X(TickLog) X(Ack) X(ServiceAnnounce) X(ServiceSnapshot) X(RunStatus) X(FrameDone)         \
-  X(BlueprintSet)                                                                       \
+  X(BlueprintSet) X(SpawnCheck) X(SpawnCheckReply)                                      \
   X(WorldInfo) X(MapData) X(Command) X(CommandReply) X(GroundState) X(AirState)          \
   X(SimEvent) X(Image) X(PointCloud) X(RadarScan) X(Imu) X(Gnss) X(Barometer)            \
   X(Magnetometer) X(CollisionEvent) X(LaneInvasionEvent) X(ObstacleDetection) X(PhysicsEvents)
@@ -34,6 +34,9 @@ inline constexpr Topic<msg::ServiceAnnounce> kService{"lockstep/service", QosKin
 inline constexpr Topic<msg::ServiceSnapshot> kSnapshot{"lockstep/snapshot", QosKind::kMembership};
 // What each service simulates (blueprint.idl); the library is their union.
 inline constexpr Topic<msg::BlueprintSet> kBlueprints{"lockstep/blueprints", QosKind::kMembership};
+// The owner's check of a spawn before the client's reply (blueprint.idl).
+inline constexpr Topic<msg::SpawnCheck> kSpawnCheck{"lockstep/spawn_check", QosKind::kCommand};
+inline constexpr Topic<msg::SpawnCheckReply> kSpawnCheckReply{"lockstep/spawn_check_reply", QosKind::kCommand};
 inline constexpr Topic<msg::RunStatus> kRunStatus{"lockstep/run_status", QosKind::kClock};
 inline constexpr Topic<msg::FrameDone> kFrameDone{"lockstep/frame_done", QosKind::kClock};
 inline constexpr Topic<msg::WorldInfo> kWorldInfo{"lockstep/world_info", QosKind::kClock};

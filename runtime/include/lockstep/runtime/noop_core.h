@@ -3,6 +3,7 @@
 // Used by the barrier benchmark and the tests, where equal hashes across services
 // prove every service saw the same commands, in the same order, in the same frame.
 #include <cstdint>
+#include <utility>
 #include <vector>
 
 #include "lockstep/runtime/service.h"
@@ -11,16 +12,20 @@ namespace lockstep {
 
 class NoopCore : public ServiceCore {
  public:
+  // `blueprints`: what it declares, for tests of actors no real service is there for.
+  explicit NoopCore(std::vector<msg::BlueprintDeclaration> blueprints = {}) : blueprints_(std::move(blueprints)) {}
   void BeginRun(const msg::WorldInfo& world) override;
   void Step(const msg::Tick& tick) override;
   uint64_t StateHash() const override { return hash_; }
   std::vector<uint8_t> SaveState() const override;
   void RestoreState(const std::vector<uint8_t>& state) override;
   bool StepNeverWaits() const override { return true; }
+  std::vector<msg::BlueprintDeclaration> Blueprints() const override { return blueprints_; }
 
   uint64_t frames() const { return frames_; }
 
  private:
+  std::vector<msg::BlueprintDeclaration> blueprints_;
   uint64_t hash_ = 0;
   uint64_t frames_ = 0;
 };

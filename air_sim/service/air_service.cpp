@@ -61,7 +61,6 @@ msg::ObjectKind ToWire(air::ObjectKind k) {
   }
   return msg::ObjectKind::OBJECT_NONE;
 }
-bool IsDroneBlueprint(const std::string& bp) { return bp.rfind("drone.", 0) == 0; }
 
 // AirSim's adaptive lookahead factor: 0 on the wire = AirSim's default 1, < 0 = off.
 double AdaptiveLookahead(const msg::DroneCommand& d) {
@@ -196,6 +195,7 @@ AirService::AirService(Bus& bus, std::string name)
       state_writer_(bus, topics::kAirState),
       event_writer_(bus, topics::kEvent),
       ground_(bus, topics::kGroundState),
+      declarations_(bus),
       physics_writer_(bus, topics::kPhysicsEvents),
       map_reader_(bus, topics::kMap, [this](const msg::MapData& m, const SampleInfo&) {
         {
@@ -251,12 +251,21 @@ void AirService::BeginRun(const msg::WorldInfo& world) {
   api_wind_.setZero();
   wind_intensity_ = world.weather().wind_intensity();
   input_timeout_s_ = world.settings().service_timeout() > 0 ? world.settings().service_timeout() : 10.0;
-  wait_for_ground_ = false;
-  for (const auto& s : world.required_services()) {
-    if (s.to_string() == "ground_sim") wait_for_ground_ = true;
+  // Whose GroundState to wait for: the members that declare vehicles or walkers. Every member
+  // publishes its set when it joins, before the coordinator counts it alive.
+  std::vector<std::string> others;
+  for (const std::string& s : RequiredServices(world)) {
+    if (s != name_) others.push_back(s);
   }
+  if (!declarations_.WaitFor(others, std::chrono::seconds(30))) {
+    throw InputError(name_ + ": the blueprint declarations of the run's services did not arrive within 30 s");
+  }
+  std::vector<std::string> ground = declarations_.Declaring(msg::ActorKind::ACTOR_VEHICLE, others);
+  for (const std::string& s : declarations_.Declaring(msg::ActorKind::ACTOR_WALKER, others)) ground.push_back(s);
+  wait_for_ground_ = !ground.empty();
   spdlog::info("run {}: seed {}, vehicles {}", world.run(), world.seed(),
-               wait_for_ground_ ? "from ground_sim (frame k-1)" : "none (no ground_sim in the run)");
+               wait_for_ground_ ? "from " + ground.front() + "'s GroundState (frame k-1)"
+                                : std::string("none (no member declares vehicles or walkers)"));
 }
 
 void AirService::Fail(const msg::FrameStamp& stamp, uint32_t actor, const std::string& why) {
@@ -279,7 +288,7 @@ void AirService::Apply(const msg::Command& c, uint64_t frame, air::Commands* out
     case msg::CommandKind::CMD_SPAWN_ACTOR: {
       const auto& s = b.spawn_actor();
       const std::string bp = s.blueprint().to_string();
-      if (!IsDroneBlueprint(bp)) return;
+      if (s.owner().to_string() != name_) return;  // the coordinator names who simulates it
       std::map<std::string, std::string> attrs;
       for (const auto& a : s.attributes()) {
         if (a.key().to_string() != "role_name") attrs[a.key().to_string()] = a.value().to_string();

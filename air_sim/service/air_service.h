@@ -10,6 +10,7 @@
 #include <string>
 
 #include "lockstep/air/air.h"
+#include "lockstep/runtime/declarations.h"
 #include "lockstep/runtime/frame_buffer.h"
 #include "lockstep/runtime/service.h"
 #include "air_blueprints.h"
@@ -24,7 +25,7 @@ class AirService final : public ServiceCore {
   uint64_t StateHash() const override { return air::StateHash(state_); }
   std::vector<msg::BlueprintDeclaration> Blueprints() const override { return AirBlueprints(); }
   std::string CheckSpawn(const msg::SpawnActor& spawn) const override { return CheckAirSpawn(spawn); }
-  // Without a ground_sim in the run the step reads only the tick: it may run on the
+  // Without a vehicle/walker simulator in the run the step reads only the tick: it may run on the
   // receive thread. With one, it waits for the vehicles of frame k-1.
   bool StepNeverWaits() const override { return !wait_for_ground_; }
 
@@ -50,7 +51,10 @@ class AirService final : public ServiceCore {
   std::optional<msg::MapData> map_;                       // latest map from the coordinator
   uint64_t town_hash_ = 0;                                // map whose mesh is in model_.statics
   std::shared_ptr<const air::StaticMesh> town_mesh_;
-  std::atomic<bool> wait_for_ground_{false};  // a ground_sim is in the run: use its vehicles (Jacobi, frame k-1)
+  // A required member declares vehicle or walker blueprints (lockstep/blueprints): use its
+  // GroundState of frame k-1 (Jacobi). Decided at BeginRun from the declarations, never by name.
+  std::atomic<bool> wait_for_ground_{false};
+  Declarations declarations_;
   air::World model_;
   air::WorldState state_;
   std::map<uint32_t, std::string> blueprints_;

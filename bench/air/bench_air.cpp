@@ -174,8 +174,8 @@ void TownCase(bool quick) {
     flying += d.landed == LandedState::kFlying ? 1 : 0;
     contacts += static_cast<int>(d.collision.collision_count);
   }
-  std::printf("{"bench":"air","case":"town_100_drones","triangles":%zu,"drones":%d,"flying":%d,"
-              ""collisions":%d,"real_time_factor":%.2f,"steps_per_s":%.0f}\n",
+  std::printf("{\"bench\":\"air\",\"case\":\"town_100_drones\",\"triangles\":%zu,\"drones\":%d,\"flying\":%d,"
+              "\"collisions\":%d,\"real_time_factor\":%.2f,\"steps_per_s\":%.0f}\n",
               s.model.statics.mesh->triangle_count(), n, flying, contacts, ticks * 0.05 / wall,
               n * ticks * 0.05 * 1000 / wall);
   std::fflush(stdout);

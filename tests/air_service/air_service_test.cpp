@@ -14,6 +14,7 @@
 #include "lockstep/coordinator/coordinator.h"
 #include "lockstep/map/scene.h"
 #include "observer.h"
+#include "stand_in_blueprints.h"
 
 namespace lockstep {
 namespace {
@@ -159,13 +160,25 @@ TEST_F(AirServiceTest, AirSimCallsOnTheWire) {
   EXPECT_NEAR(s->drones()[0].transform().position().z(), 6.0, 0.2);
   EXPECT_NEAR(s->drones()[0].transform().position().x(), 4.0, 0.2);
   EXPECT_FALSE(s->drones()[0].can_arm()) << "flying";
+  // moveToGPS through the geo-reference (no map here: lat_0 = lon_0 = 0): 3 m east.
+  const air::GeoPoint goal = air::ToGeo(air::GeoReference{}, air::Vec3(7, 2, 6));
+  EXPECT_TRUE(Drone(drone, K::DRONE_MOVE_TO_GPS, 12, [&](msg::DroneCommand& d) {
+                d.values({goal.latitude, goal.longitude, goal.altitude});
+                d.velocity(2);
+              }).accepted());
+  Tick(80);
+  s = WaitState(281);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->drones()[0].command_status(), msg::DroneCommandStatus::DRONE_CMD_COMPLETED);
+  EXPECT_NEAR(s->drones()[0].transform().position().x(), 7.0, 0.25);
+  EXPECT_NEAR(s->drones()[0].gps_location().longitude(), goal.longitude, 3e-6);
   // moveByRollPitchYawrateZ: yaw rate 0.5 rad/s at 6 m; rates-Z and rpy-rate-throttle accepted.
   EXPECT_TRUE(Drone(drone, K::DRONE_MOVE_BY_ROLL_PITCH_YAWRATE_Z, 4, [](msg::DroneCommand& d) {
                 d.values({0, 0, 0.5, 6.0});
                 d.duration(3);
               }).accepted());
   Tick(40);
-  s = WaitState(241);
+  s = WaitState(321);
   ASSERT_TRUE(s);
   EXPECT_NEAR(s->drones()[0].angular_velocity().z(), 0.5, 0.1);
   EXPECT_EQ(s->drones()[0].command_status(), msg::DroneCommandStatus::DRONE_CMD_RUNNING);
@@ -177,16 +190,37 @@ TEST_F(AirServiceTest, AirSimCallsOnTheWire) {
   EXPECT_FALSE(Drone(drone, K::DRONE_MOVE_BY_ROLL_PITCH_YAWRATE_THROTTLE, 7, [](msg::DroneCommand& d) {
                  d.values({0, 0, 0, 1.5});
                }).accepted());
-  // simSetWind: a 4 m/s wind from the west pushes the hovering drone east until the position
-  // loop leans into it.
-  EXPECT_TRUE(Drone(drone, K::DRONE_SET_WIND, 8, [](msg::DroneCommand& d) { d.target().x(4); }).accepted());
-  EXPECT_TRUE(Drone(drone, K::DRONE_HOVER, 9).accepted());
-  Tick(60);
-  s = WaitState(301);
+  // simSetWind: a 10 m/s wind towards +x pushes the hovering drone downwind until the position
+  // loop leans it into the wind (a few degrees: the tilted bottom face, pi D^2 per rotor, also
+  // meets the wind).
+  s = WaitState(321);
   ASSERT_TRUE(s);
-  const auto& q = s->drones()[0].transform().orientation();
-  const double pitch = std::asin(std::clamp(2 * (q.w() * q.y() - q.z() * q.x()), -1.0, 1.0));
-  EXPECT_LT(pitch, -0.01) << "nose up into the wind (FLU pitch < 0)";
+  const double x_before = s->drones()[0].transform().position().x();
+  auto pitch_of = [](const msg::DroneState& d) {
+    const auto& q = d.transform().orientation();
+    return std::asin(std::clamp(2 * (q.w() * q.y() - q.z() * q.x()), -1.0, 1.0));
+  };
+  EXPECT_TRUE(Drone(drone, K::DRONE_SET_WIND, 8, [](msg::DroneCommand& d) { d.target().x(10); }).accepted());
+  EXPECT_TRUE(Drone(drone, K::DRONE_HOVER, 9).accepted());
+  Tick(100);
+  s = WaitState(421);
+  ASSERT_TRUE(s);
+  const double hold_x = x_before;  // hover holds where it was (within the yaw manoeuvre's drift)
+  EXPECT_LT(pitch_of(s->drones()[0]), -0.01) << "nose up into the wind (FLU pitch < 0)";
+  EXPECT_GT(s->drones()[0].transform().position().x() - hold_x, 0.1) << "pushed downwind";
+  // The weather's wind: wind_intensity 100 = 10 m/s towards +x with seeded gusts; simSetWind off.
+  EXPECT_TRUE(Drone(drone, K::DRONE_SET_WIND, 11, [](msg::DroneCommand& d) { d.target().x(0); }).accepted());
+  EXPECT_TRUE(Drone(drone, K::DRONE_HOVER, 13).accepted());
+  Tick(20);
+  msg::WeatherParameters weather;
+  weather.wind_intensity(100);
+  msg::CommandBody wb;
+  wb.weather(weather);
+  EXPECT_TRUE(Send(wb).accepted());
+  Tick(100);
+  s = WaitState(541);
+  ASSERT_TRUE(s);
+  EXPECT_LT(pitch_of(s->drones()[0]), -0.01) << "leaning into the weather's wind";
   // simSetKinematics: teleport with a velocity.
   EXPECT_TRUE(Drone(drone, K::DRONE_SET_KINEMATICS, 10, [](msg::DroneCommand& d) {
                 d.target().x(20);
@@ -195,7 +229,7 @@ TEST_F(AirServiceTest, AirSimCallsOnTheWire) {
                 d.values({1, 0, 0, 0, 2, 0, 0});
               }).accepted());
   Tick(1);
-  s = WaitState(302);
+  s = WaitState(542);
   ASSERT_TRUE(s);
   EXPECT_NEAR(s->drones()[0].transform().position().x(), 20.0, 0.2);
   EXPECT_NEAR(s->drones()[0].transform().position().z(), 10.0, 0.2);
@@ -379,6 +413,8 @@ class CarOnlyGround final : public ServiceCore {
  public:
   explicit CarOnlyGround(Bus& bus) : writer_(bus, topics::kGroundState) {}
   void BeginRun(const msg::WorldInfo&) override {}
+  // It simulates vehicles: that (not its name) makes air_sim wait for its GroundState.
+  std::vector<msg::BlueprintDeclaration> Blueprints() const override { return testing::StandInBlueprints(); }
   void Step(const msg::Tick& tick) override {
     msg::GroundState g;
     g.stamp().run(tick.run());
@@ -409,7 +445,7 @@ TEST(AirServiceGround, ClientLandsADroneOnACarDrivingAtFiveMetresPerSecond) {
   LaunchConfig c;
   c.world.synchronous_mode(true);
   c.world.service_timeout(30);
-  c.services.push_back({"ground_sim", "car_only", "", {}, true, false, "never"});
+  c.services.push_back({"traffic", "car_only", "", {}, true, false, "never"});  // any name: found by its declarations
   c.services.push_back({"air_sim", "air_sim", "", {}, true, false, "never"});
   auto bus = CreateInProcessBus();
   std::mutex mu;
@@ -427,7 +463,7 @@ TEST(AirServiceGround, ClientLandsADroneOnACarDrivingAtFiveMetresPerSecond) {
   Coordinator coordinator(*bus, c);
   CarOnlyGround car(*bus);
   AirService drones(*bus);
-  ServiceRunner rg(*bus, ServiceOptions{"ground_sim", "car_only", false}, car);
+  ServiceRunner rg(*bus, ServiceOptions{"traffic", "car_only", false}, car);
   ServiceRunner ra(*bus, ServiceOptions{"air_sim", "air_sim", false}, drones);
   std::atomic<bool> stop{false};
   std::thread tg([&] { rg.Run(stop); });

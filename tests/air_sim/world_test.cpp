@@ -275,3 +275,38 @@ TEST(air_world, DronesCollideWithEachOther) {
 
 }  // namespace
 }  // namespace lockstep::air
+
+namespace lockstep::air {
+namespace {
+
+// Drone 2 flies at 6 m/s into hovering drone 1. Each sees the other at its tick-start pose
+// moved by its tick-start velocity, so both detect the contact at the same sub-step; a
+// hovering drone that saw the other frozen at its tick-start pose would notice it a tick late.
+TEST(air_world, BothDronesSeeTheirContactAtTheSameSubStep) {
+  Sim sim;
+  sim.Add(1, {}, Vec3(0, 0, 0));
+  sim.Add(2, {}, Vec3(-12, 0, 0));
+  sim.Send(1, cmd::Arm{});
+  sim.Send(2, cmd::Arm{});
+  sim.Send(1, cmd::Takeoff{});
+  sim.Send(2, cmd::Takeoff{});
+  sim.Run(7.0);
+  sim.Send(2, cmd::MoveByVelocity{Vec3(6, 0, 0), 5.0});
+  double t1 = -1, t2 = -1;
+  for (int i = 0; i < 100 && (t1 < 0 || t2 < 0); ++i) {
+    sim.Tick();
+    for (const AirEvent& e : sim.state.events) {
+      if (e.kind != EventKind::kCollision || e.object_kind != ObjectKind::kDrone) continue;
+      if (e.drone == 1 && t1 < 0) t1 = e.time;
+      if (e.drone == 2 && t2 < 0) t2 = e.time;
+    }
+  }
+  std::printf("contact seen by the hovering drone at %.4f s, by the moving one at %.4f s\n", t1, t2);
+  ASSERT_GT(t1, 0);
+  ASSERT_GT(t2, 0);
+  EXPECT_NEAR(t1, t2, 0.0025);
+  EXPECT_GT(sim.D(1).velocity.x(), 0.5) << "the hovering drone was pushed";
+}
+
+}  // namespace
+}  // namespace lockstep::air

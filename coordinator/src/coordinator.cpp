@@ -512,6 +512,7 @@ struct Coordinator::Impl {
           continue;
         }
         if (c.body()._d() == msg::CommandKind::CMD_DRONE) c.body().drone().actor(it->second);
+        if (c.body()._d() == msg::CommandKind::CMD_SPAWN_ACTOR) c.body().spawn_actor().parent(it->second);
       }
       SyncLibrary();
       msg::CommandReply r = commands.Submit(c, run, for_frame, settings.synchronous_mode(),

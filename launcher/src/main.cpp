@@ -2,6 +2,8 @@
 //   lockstep up <config.yaml>     start the coordinator and services of a simulation
 //   lockstep status               members, frame and tick rate of a running simulation
 //   lockstep map info <file>      statistics of an OpenDRIVE map (delegates to lockstep-map)
+//   lockstep python <script> ...  runs a Python script with `lockstep`, `carla` and `airsim`
+//                                 resolving to Lockstep's packages (docs/python.md)
 #include <CLI/CLI.hpp>
 #include <unistd.h>
 
@@ -91,6 +93,21 @@ int Status(int domain, const std::string& profile, double wait_s, bool json) {
   return 0;
 }
 
+// The packages live in build/python (lockstep) and build/python/dropin (carla, airsim).
+int RunPython(std::vector<std::string> args) {
+  const std::string root = std::filesystem::path(BinDir()).parent_path().string() + "/python";
+  std::string path = root + ":" + root + "/dropin";
+  if (const char* old = std::getenv("PYTHONPATH"); old && *old) path += std::string(":") + old;
+  setenv("PYTHONPATH", path.c_str(), 1);
+  const char* python = std::getenv("LOCKSTEP_PYTHON") ? std::getenv("LOCKSTEP_PYTHON") : "/usr/bin/python3";
+  std::vector<char*> argv{const_cast<char*>(python)};
+  for (auto& a : args) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  execv(python, argv.data());
+  std::fprintf(stderr, "lockstep python: cannot run %s\n", python);
+  return 127;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -116,6 +133,9 @@ int main(int argc, char** argv) {
   auto* map = app.add_subcommand("map", "map tools (see lockstep-map --help)");
   map->prefix_command();
 
+  auto* python = app.add_subcommand("python", "run a Python script with the lockstep, carla and airsim packages");
+  python->prefix_command();
+
   CLI11_PARSE(app, argc, argv);
   lockstep::InitLogging("lockstep");
   std::signal(SIGINT, OnSignal);
@@ -133,6 +153,7 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "lockstep map: cannot run %s\n", tool.c_str());
       return 127;
     }
+    if (*python) return RunPython(python->remaining());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "lockstep: %s\n", e.what());
     return 2;

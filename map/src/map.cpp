@@ -16,6 +16,7 @@ Eigen::Vector3d Transform::Forward() const {
 Map::Map(OpenDrive data, std::string name) : data_(std::move(data)), name_(std::move(name)) {
   BuildGraph();
   index_ = BuildSegmentIndex(*this, &bounds_min_, &bounds_max_);
+  BuildJunctions();
 }
 Map::~Map() = default;
 Map::Map(Map&&) noexcept = default;
@@ -79,8 +80,13 @@ void Map::BuildGraph() {
     const bool forward = n.lane < 0;
     const int next_section = n.section + (forward ? 1 : -1);
     if (next_section >= 0 && next_section < static_cast<int>(road.sections.size())) {
+      // Only explicit lane links, from either side: this lane's successors (in s) or
+      // the next section's lanes that name this one as their predecessor.
       std::vector<int> ids = forward ? lane.successors : lane.predecessors;
-      if (ids.empty()) ids.push_back(n.lane);
+      for (const Lane& other : road.sections[static_cast<std::size_t>(next_section)].lanes) {
+        const std::vector<int>& back = forward ? other.predecessors : other.successors;
+        if (other.id != 0 && std::find(back.begin(), back.end(), n.lane) != back.end()) ids.push_back(other.id);
+      }
       for (int id : ids) {
         if ((id < 0) != forward) continue;  // a lane link may not reverse direction inside a road
         const int target = NodeOf(n.road, next_section, id);
@@ -116,11 +122,21 @@ void Map::LinkRoadEnd(int node_id, bool at_end) {
   if (link.kind == RoadLink::Kind::Road) {
     auto it = data_.road_index.find(link.element_id);
     if (it == data_.road_index.end()) return;
-    const std::vector<int>& ids = at_end ? lane.successors : lane.predecessors;
-    if (!ids.empty()) {
-      for (int id : ids) add(it->second, link.contact, id);
-    } else {
-      add(it->second, link.contact, link.contact == ContactPoint::End ? std::abs(n.lane) : -std::abs(n.lane));
+    // Only explicit lane links (OpenDRIVE has no implicit ones): this lane's own
+    // successors/predecessors, and the lanes of the linked road that name this lane
+    // in their list for this end, when that road's link there names this road.
+    for (int id : at_end ? lane.successors : lane.predecessors) add(it->second, link.contact, id);
+    const Road& tr = data_.roads[static_cast<std::size_t>(it->second)];
+    const bool enters_at_start = link.contact != ContactPoint::End;
+    const RoadLink& back_link = enters_at_start ? tr.predecessor : tr.successor;
+    const ContactPoint this_end = at_end ? ContactPoint::End : ContactPoint::Start;
+    if (!tr.sections.empty() && back_link.kind == RoadLink::Kind::Road && back_link.element_id == road.id &&
+        (back_link.contact == this_end || back_link.contact == ContactPoint::None)) {
+      const LaneSection& entry = enters_at_start ? tr.sections.front() : tr.sections.back();
+      for (const Lane& other : entry.lanes) {
+        const std::vector<int>& back = enters_at_start ? other.predecessors : other.successors;
+        if (other.id != 0 && std::find(back.begin(), back.end(), n.lane) != back.end()) add(it->second, link.contact, other.id);
+      }
     }
   } else if (link.kind == RoadLink::Kind::Junction) {
     auto jt = data_.junction_index.find(link.element_id);
@@ -158,17 +174,29 @@ Waypoint Map::MakeWaypoint(int road, int section, int lane, double s) const {
   wp.section = section;
   wp.lane = lane;
   wp.s = s;
-  const LaneSpan span = LaneSpanOf(r, static_cast<std::size_t>(section), lane, s);
-  double hdg = 0;
-  wp.transform.location = RoadToWorld(r, s, span.Center(), &hdg);
-  const double slope = RoadSlope(r, s);
+  const LaneCentre centre = LaneCentreOf(r, static_cast<std::size_t>(section), lane, s);
+  const Pose2 ref = EvaluateReferenceLine(r.plan_view, s);
+  const double t = centre.t;
+  double z, slope;
+  EvalPoly3SequenceWithSlope(r.elevation, s, &z, &slope);
+  wp.transform.location = Eigen::Vector3d(ref.x - t * std::sin(ref.hdg), ref.y + t * std::cos(ref.hdg), z);
+  // Direction of the lane centre p(s) + t(s) n(s): d/ds = (1 - k t) T + t' N. CARLA
+  // adds t' to the heading; this is the exact angle (equal to first order).
+  const double hdg = centre.dt == 0 ? ref.hdg : ref.hdg + std::atan2(centre.dt, std::max(1.0 - ref.curvature * t, 1e-3));
   const bool forward = lane <= 0;
   wp.transform.yaw = forward ? hdg : hdg + std::numbers::pi;
-  wp.transform.yaw = std::remainder(wp.transform.yaw, 2 * std::numbers::pi);
+  // Wrap to [-pi, pi]. Within 3 pi one exact subtraction gives what std::remainder
+  // gives, at a fraction of its cost (this is the hottest path of waypoint queries).
+  double& yaw = wp.transform.yaw;
+  if (!(std::fabs(yaw) < 3 * std::numbers::pi)) yaw = std::remainder(yaw, 2 * std::numbers::pi);
+  else if (yaw > std::numbers::pi) yaw -= 2 * std::numbers::pi;
+  else if (yaw < -std::numbers::pi) yaw += 2 * std::numbers::pi;
   wp.transform.pitch = std::atan(forward ? slope : -slope);
-  wp.lane_width = span.Width();
+  wp.lane_width = centre.width;
   if (const Lane* l = sec.Find(lane)) wp.lane_type = l->type;
   wp.junction = r.junction_index;
+  wp.road_id = r.id;
+  if (r.junction_index >= 0) wp.junction_id = data_.junctions[static_cast<std::size_t>(r.junction_index)].id;
   const auto mm = static_cast<std::uint64_t>(static_cast<std::int64_t>(std::llround(s * 1000.0)));
   wp.id = (static_cast<std::uint64_t>(road) * 0x9E3779B97F4A7C15ull) ^
           (static_cast<std::uint64_t>(section) << 48) ^ (static_cast<std::uint64_t>(lane + 512) << 36) ^ mm;
@@ -201,16 +229,68 @@ std::vector<Waypoint> Map::Previous(const Waypoint& wp, double distance) const {
   return Walk(wp, distance, false, &budget);
 }
 
-std::vector<Waypoint> Map::NextUntilLaneEnd(const Waypoint& wp, double distance) const {
+// CARLA's next_until_lane_end / previous_until_lane_start: steps of `distance` while
+// the walk stays on one branch of the same road, then the point where the lane leaves
+// the road (the lane end; across lane sections, as CARLA's lane end is the road's).
+std::vector<Waypoint> Map::UntilRoadEnd(const Waypoint& wp, double distance, bool forward) const {
   std::vector<Waypoint> out;
-  const int id = NodeOf(wp);
-  if (id < 0 || !(distance > 0)) return out;
-  const LaneNode& n = nodes_[static_cast<std::size_t>(id)];
-  const double sign = n.Forward() ? 1.0 : -1.0;
-  const double room = sign > 0 ? n.s_end - wp.s : wp.s - n.s_begin;
-  for (double d = distance; d < room; d += distance) out.push_back(MakeWaypoint(n.road, n.section, n.lane, wp.s + sign * d));
-  out.push_back(MakeWaypoint(n.road, n.section, n.lane, n.ExitS()));
+  if (NodeOf(wp) < 0 || !(distance > 0)) return out;
+  const Road& road = data_.roads[static_cast<std::size_t>(wp.road)];
+  // Bounded so a tiny step on a long road cannot allocate without limit.
+  const std::size_t max_points = 100000;
+  Waypoint cur = wp;
+  while (out.size() < max_points) {
+    int budget = kWalkBudget;
+    std::vector<Waypoint> step = Walk(cur, distance, forward, &budget);
+    if (step.size() != 1 || step.front().road != wp.road) break;
+    // s moves monotonically along a lane within a road; stop if it does not (loops).
+    const bool advances = ((wp.lane < 0) == forward) ? step.front().s > cur.s : step.front().s < cur.s;
+    if (!advances) break;
+    cur = step.front();
+    out.push_back(cur);
+  }
+  // The rest of the way to the road end in this walk's direction.
+  const bool towards_end = (wp.lane < 0) == forward;
+  const double remaining = towards_end ? road.length - cur.s : cur.s;
+  int budget = kWalkBudget;
+  for (const Waypoint& w : Walk(cur, std::max(0.0, remaining), forward, &budget)) {
+    if (w.road != wp.road) continue;
+    if (out.empty() || std::fabs(out.back().s - w.s) > 1e-9 || out.back().lane != w.lane) out.push_back(w);
+    break;
+  }
   return out;
+}
+
+std::vector<Waypoint> Map::NextUntilLaneEnd(const Waypoint& wp, double distance) const {
+  return UntilRoadEnd(wp, distance, true);
+}
+std::vector<Waypoint> Map::PreviousUntilLaneStart(const Waypoint& wp, double distance) const {
+  return UntilRoadEnd(wp, distance, false);
+}
+
+int Map::RoadIndex(const std::string& road_id) const {
+  auto it = data_.road_index.find(road_id);
+  return it == data_.road_index.end() ? -1 : it->second;
+}
+
+std::optional<Waypoint> Map::WaypointXodr(const std::string& road_id, int lane_id, double s) const {
+  const int road = RoadIndex(road_id);
+  if (road < 0 || lane_id == 0) return std::nullopt;
+  const Road& r = data_.roads[static_cast<std::size_t>(road)];
+  if (!(s >= 0) || !(s < r.length) || r.sections.empty()) return std::nullopt;
+  // Where two sections meet, s belongs to both: take the one that has the lane.
+  const int section = static_cast<int>(FindSection(r, s));
+  for (int sec : {section, section - 1}) {
+    if (sec < 0 || NodeOf(road, sec, lane_id) < 0) continue;
+    const LaneSection& ls = r.sections[static_cast<std::size_t>(sec)];
+    if (s < ls.s - 1e-9 || s > ls.s + ls.length + 1e-9) continue;
+    return MakeWaypoint(road, sec, lane_id, s);
+  }
+  return std::nullopt;
+}
+
+std::optional<Waypoint> Map::WaypointXodr(int road_id, int lane_id, double s) const {
+  return WaypointXodr(std::to_string(road_id), lane_id, s);
 }
 
 std::optional<Waypoint> Map::Neighbour(const Waypoint& wp, int lane) const {

@@ -70,12 +70,12 @@ std::unique_ptr<SegmentIndex> BuildSegmentIndex(const Map& map, Eigen::Vector2d*
     const std::vector<double> st = SampleStations(road, n.s_begin, n.s_end, 5.0 * scale, 1.0 * scale);
     double px = 0, py = 0, pw = 0;
     for (std::size_t k = 0; k < st.size(); ++k) {
-      const LaneSpan span = LaneSpanOf(road, static_cast<std::size_t>(n.section), n.lane, st[k]);
-      const Eigen::Vector3d p = RoadToWorld(road, st[k], span.Center());
+      const LaneCentre span = LaneCentreOf(road, static_cast<std::size_t>(n.section), n.lane, st[k]);
+      const Eigen::Vector3d p = RoadToWorld(road, st[k], span.t);
       if (!p.allFinite() || p.head<2>().cwiseAbs().maxCoeff() > 1e9) {
         break;  // geometry blew up (hostile input): stop indexing this lane
       }
-      const double hw = std::min(0.5 * span.Width(), kMaxIndexedHalfWidth);
+      const double hw = std::min(0.5 * span.width, kMaxIndexedHalfWidth);
       if (k > 0) {
         idx->segments.push_back(LaneSegment{px, py, p.x(), p.y(), st[k - 1], st[k],
                                             static_cast<float>(std::max(hw, pw)), static_cast<int>(ni)});
@@ -152,8 +152,8 @@ std::optional<Waypoint> Map::NearestWaypoint(const Eigen::Vector3d& p, bool proj
     for (const LanePoint& lp : LanesAt(p.x(), p.y())) {
       const LaneNode& n = nodes_[static_cast<std::size_t>(lp.node)];
       if (!types.Has(n.type)) continue;
-      const LaneSpan span = LaneSpanOf(data_.roads[static_cast<std::size_t>(n.road)], static_cast<std::size_t>(n.section), n.lane, lp.s);
-      const double off = std::fabs(lp.t - span.Center());
+      const double off = std::fabs(lp.t - LaneCentreOf(data_.roads[static_cast<std::size_t>(n.road)],
+                                                         static_cast<std::size_t>(n.section), n.lane, lp.s).t);
       if (off < best_off) {
         best_off = off;
         best = MakeWaypoint(n.road, n.section, n.lane, lp.s);

@@ -1,15 +1,21 @@
 // Whole-map enumerations: waypoints, topology, junction pairs, spawn points.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 
 #include "lockstep/map/map.h"
+#include "map_internal.h"
 
 namespace lockstep::map {
 
 std::vector<Waypoint> Map::GenerateWaypoints(double distance, LaneTypeMask types) const {
   std::vector<Waypoint> out;
   if (!(distance > 0)) return out;
+  std::size_t count = 0;  // reserve: a Waypoint is large enough that regrowing costs
+  for (const LaneNode& n : nodes_)
+    if (types.Has(n.type)) count += 1 + static_cast<std::size_t>(std::min(n.Length() / distance, 1e7));
+  out.reserve(count);
   for (const LaneNode& n : nodes_) {
     if (!types.Has(n.type)) continue;
     // Along the travel direction, starting at the entry, like CARLA's GenerateWaypoints.
@@ -50,6 +56,49 @@ std::vector<std::pair<Waypoint, Waypoint>> Map::JunctionWaypoints(int junction, 
     }
   }
   return out;
+}
+
+void Map::BuildJunctions() {
+  junctions_.clear();
+  for (std::size_t j = 0; j < data_.junctions.size(); ++j) {
+    JunctionInfo info;
+    info.index = static_cast<int>(j);
+    info.id = data_.junctions[j].id;
+    junctions_.push_back(std::move(info));
+  }
+  // CARLA bounds the junction by points on the lane centres of its connecting roads
+  // (all lane types); here every lane node of those roads.
+  const double inf = std::numeric_limits<double>::infinity();
+  std::vector<Eigen::Vector3d> lo(junctions_.size(), Eigen::Vector3d::Constant(inf));
+  std::vector<Eigen::Vector3d> hi(junctions_.size(), Eigen::Vector3d::Constant(-inf));
+  for (const LaneNode& n : nodes_) {
+    const Road& road = data_.roads[static_cast<std::size_t>(n.road)];
+    if (road.junction_index < 0) continue;
+    const auto j = static_cast<std::size_t>(road.junction_index);
+    // Steps of 5 m on straights, 1.5 m in curves (CARLA: 10 steps per lane).
+    for (double s : SampleStations(road, n.s_begin, n.s_end, 5.0, 1.5)) {
+      const Eigen::Vector3d p = RoadToWorld(road, s, LaneCentreOf(road, static_cast<std::size_t>(n.section), n.lane, s).t);
+      if (!p.allFinite()) continue;
+      lo[j] = lo[j].cwiseMin(p);
+      hi[j] = hi[j].cwiseMax(p);
+    }
+  }
+  for (std::size_t j = 0; j < junctions_.size(); ++j) {
+    if (!(lo[j].x() <= hi[j].x())) continue;  // no connecting road: an empty box at the origin
+    junctions_[j].bounding_box.location = 0.5 * (lo[j] + hi[j]);
+    junctions_[j].bounding_box.extent = 0.5 * (hi[j] - lo[j]);
+  }
+}
+
+std::optional<JunctionInfo> Map::JunctionOf(const Waypoint& wp) const {
+  if (wp.junction < 0 || wp.junction >= static_cast<int>(junctions_.size())) return std::nullopt;
+  return junctions_[static_cast<std::size_t>(wp.junction)];
+}
+
+std::optional<JunctionInfo> Map::JunctionById(const std::string& junction_id) const {
+  auto it = data_.junction_index.find(junction_id);
+  if (it == data_.junction_index.end()) return std::nullopt;
+  return junctions_[static_cast<std::size_t>(it->second)];
 }
 
 namespace {

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "lockstep/map/road_profile.h"
+#include "piecewise_cubic.h"
 
 namespace lockstep::map {
 namespace {
@@ -20,6 +21,36 @@ namespace {
 constexpr double kMaxLength = 1.0e5;       // one road (m)
 constexpr double kMaxCoordinate = 1.0e7;   // (m)
 constexpr int kMaxLanesPerSide = 64;
+
+// OpenDRIVE <border>: a lane's outer edge as t from the reference line (positive
+// left), independent of the lanes inside it. Turns borders into the equivalent width
+// records (outer edge minus the inner neighbour's outer edge, the centre lane sitting
+// at the road's laneOffset), so every later query reads widths only. A lane with
+// <width> records keeps them (the standard gives width precedence).
+void WidthsFromBorders(const Road& road, LaneSection* sec) {
+  const bool any = std::any_of(sec->lanes.begin(), sec->lanes.end(),
+                               [](const Lane& l) { return l.widths.empty() && !l.borders.empty(); });
+  if (!any) return;
+  for (const int side : {1, -1}) {
+    std::vector<Poly3> inner = RebasePoly3s(road.lane_offset, sec->s);  // t of the centre lane
+    for (int id = side;; id += side) {
+      Lane* lane = sec->Find(id);
+      if (!lane) break;
+      std::vector<Poly3> outer;
+      if (!lane->widths.empty()) {
+        outer = CombinePoly3s(inner, RebasePoly3s(lane->widths, 0.0), side);
+      } else if (!lane->borders.empty()) {
+        outer = RebasePoly3s(lane->borders, 0.0);
+        lane->widths = CombinePoly3s(outer, inner, -1.0);  // left: outer - inner
+        if (side < 0)                                      // right: inner - outer
+          for (Poly3& w : lane->widths) w = Poly3{w.s, -w.a, -w.b, -w.c, -w.d};
+      } else {
+        outer = inner;
+      }
+      inner = std::move(outer);
+    }
+  }
+}
 
 class Reader {
  public:
@@ -216,9 +247,11 @@ class Reader {
       g.kind = GeometryKind::ParamPoly3;
       g.au = Num(k, "aU"); g.bu = Num(k, "bU"); g.cu = Num(k, "cU"); g.du = Num(k, "dU");
       g.av = Num(k, "aV"); g.bv = Num(k, "bV"); g.cv = Num(k, "cV"); g.dv = Num(k, "dV");
+      // A missing pRange means "normalized" (OpenDRIVE 1.4, where p ran over [0, 1], and CARLA).
       const std::string range = k.attribute("pRange").value();
-      if (range == "normalized") g.p_range_normalized = true;
-      else if (!range.empty() && range != "arcLength") Fail(k, "pRange must be 'arcLength' or 'normalized'");
+      if (range == "arcLength") g.p_range_normalized = false;
+      else if (range.empty() || range == "normalized") g.p_range_normalized = true;
+      else Fail(k, "pRange must be 'arcLength' or 'normalized', got '" + range + "'");
     } else {
       Fail(k, "unknown geometry shape <" + kind + ">");
     }
@@ -293,9 +326,10 @@ class Reader {
       for (pugi::xml_node p = link.child("successor"); p; p = p.next_sibling("successor")) l.successors.push_back(Int(p, "id"));
     }
     for (pugi::xml_node w = n.child("width"); w; w = w.next_sibling("width")) l.widths.push_back(ReadPoly(w, "sOffset"));
-    if (l.widths.empty())  // OpenDRIVE 1.4 allowed <border> instead of width; treat as width from 0
-      for (pugi::xml_node w = n.child("border"); w; w = w.next_sibling("border")) l.widths.push_back(ReadPoly(w, "sOffset"));
     std::stable_sort(l.widths.begin(), l.widths.end(), [](const Poly3& a, const Poly3& b) { return a.s < b.s; });
+    // <border>: the outer edge's t; turned into widths once the whole road is read.
+    for (pugi::xml_node b = n.child("border"); b; b = b.next_sibling("border")) l.borders.push_back(ReadPoly(b, "sOffset"));
+    std::stable_sort(l.borders.begin(), l.borders.end(), [](const Poly3& a, const Poly3& b) { return a.s < b.s; });
     for (pugi::xml_node m = n.child("roadMark"); m; m = m.next_sibling("roadMark")) l.marks.push_back(ReadMark(m));
     std::stable_sort(l.marks.begin(), l.marks.end(), [](const RoadMark& a, const RoadMark& b) { return a.s_offset < b.s_offset; });
     if (const pugi::xml_node sp = n.child("speed")) {
@@ -382,6 +416,7 @@ class Reader {
       const double end = i + 1 < r.sections.size() ? std::clamp(r.sections[i + 1].s, 0.0, r.length) : r.length;
       sec.length = std::max(0.0, end - sec.s);
     }
+    for (LaneSection& sec : r.sections) WidthsFromBorders(r, &sec);
     if (const pugi::xml_node sigs = n.child("signals")) {
       for (pugi::xml_node s = sigs.child("signal"); s; s = s.next_sibling("signal")) r.signals.push_back(ReadSignal(s));
       for (pugi::xml_node s = sigs.child("signalReference"); s; s = s.next_sibling("signalReference")) {

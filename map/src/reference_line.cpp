@@ -7,7 +7,10 @@
 namespace lockstep::map {
 namespace {
 
-constexpr int kArcTableSize = 128;
+constexpr int kArcTableSize = 128;          // arc-length table entries at least
+constexpr int kMaxArcTableSize = 8192;      // and at most (bounded memory on hostile input)
+constexpr double kArcTableStep = 0.1;       // target arc-length step of the table (m)
+constexpr int kMinSimpsonSteps = 64, kMaxSimpsonSteps = 16384;  // Simpson steps over the parameter range
 
 Pose2 Line(const Geometry& g, double ds) {
   return {g.x + ds * std::cos(g.hdg), g.y + ds * std::sin(g.hdg), g.hdg, 0.0};
@@ -63,21 +66,30 @@ Pose2 Local(const Geometry& g, double u, double v, double du, double dv, double 
   return p;
 }
 
-// poly3 is given in u; arc length is tabulated at equal u steps and inverted.
-Pose2 Poly3Geom(const Geometry& g, double ds) {
-  double u = ds;
+// Curve parameter (poly3: u, paramPoly3: p) at arc length ds, from the table that
+// PrepareGeometry fills (linear between samples). Without a table: the parameter
+// proportional to ds (pRange as if the curve's speed were constant).
+double ParameterAt(const Geometry& g, double ds, double p_end) {
   const auto& tab = g.arc_table;
-  if (tab.size() >= 2 && g.length > 0) {
-    const double f = std::clamp(ds / g.length, 0.0, 1.0) * static_cast<double>(tab.size() - 1);
-    const std::size_t i = std::min(static_cast<std::size_t>(f), tab.size() - 2);
-    const double w = f - static_cast<double>(i);
-    u = tab[i] * (1 - w) + tab[i + 1] * w;
-  }
+  if (tab.size() < 2 || !(g.length > 0)) return g.length > 0 ? ds / g.length * p_end : 0.0;
+  const double f = std::clamp(ds / g.length, 0.0, 1.0) * static_cast<double>(tab.size() - 1);
+  const std::size_t i = std::min(static_cast<std::size_t>(f), tab.size() - 2);
+  const double w = f - static_cast<double>(i);
+  return tab[i] * (1 - w) + tab[i + 1] * w;
+}
+
+double ParamEnd(const Geometry& g) {
+  if (g.kind == GeometryKind::ParamPoly3) return g.p_range_normalized ? 1.0 : g.length;
+  return g.length;  // poly3: u <= arc length
+}
+
+Pose2 Poly3Geom(const Geometry& g, double ds) {
+  const double u = ParameterAt(g, ds, ParamEnd(g));
   return Local(g, u, Poly(g.a, g.b, g.c, g.d, u), 1.0, PolyD(g.b, g.c, g.d, u), 0.0, PolyDD(g.c, g.d, u));
 }
 
 Pose2 ParamPoly3(const Geometry& g, double ds) {
-  const double p = g.p_range_normalized ? (g.length > 0 ? ds / g.length : 0.0) : ds;
+  const double p = ParameterAt(g, ds, ParamEnd(g));
   return Local(g, Poly(g.au, g.bu, g.cu, g.du, p), Poly(g.av, g.bv, g.cv, g.dv, p),
                PolyD(g.bu, g.cu, g.du, p), PolyD(g.bv, g.cv, g.dv, p), PolyDD(g.cu, g.du, p),
                PolyDD(g.cv, g.dv, p));
@@ -86,35 +98,42 @@ Pose2 ParamPoly3(const Geometry& g, double ds) {
 }  // namespace
 
 void PrepareGeometry(Geometry& g) {
-  if (g.kind != GeometryKind::Poly3 || !(g.length > 0)) return;
-  // Integrate arc length over u with fine Simpson steps, then sample u(s) at
-  // kArcTableSize equal arc-length steps.
-  constexpr int kSteps = 2048;
-  auto speed = [&](double u) { const double dv = PolyD(g.b, g.c, g.d, u); return std::sqrt(1 + dv * dv); };
-  // u_end: the u where arc length reaches g.length (arc length >= u, so u_end <= length).
-  std::vector<double> us(kSteps + 1), ss(kSteps + 1);
-  const double u_max = g.length;
-  const double h = u_max / kSteps;
-  us[0] = 0;
-  ss[0] = 0;
-  for (int i = 1; i <= kSteps; ++i) {
+  if ((g.kind != GeometryKind::Poly3 && g.kind != GeometryKind::ParamPoly3) || !(g.length > 0)) return;
+  // Integrate arc length over the curve parameter with Simpson steps, then sample the
+  // parameter at equal arc-length steps (the reader's table, interpolated linearly).
+  // The record's length is authoritative: the table spans arc length [0, length], so
+  // a curve whose parameter range is longer is cut there, and one whose range is
+  // shorter is continued along its polynomial (up to 4x the range).
+  auto speed = [&](double p) {
+    if (g.kind == GeometryKind::Poly3) {
+      const double dv = PolyD(g.b, g.c, g.d, p);
+      return std::sqrt(1 + dv * dv);
+    }
+    const double du = PolyD(g.bu, g.cu, g.du, p), dv = PolyD(g.bv, g.cv, g.dv, p);
+    return std::sqrt(du * du + dv * dv);
+  };
+  const double p_end = ParamEnd(g);
+  const int steps = std::clamp(static_cast<int>(g.length / 0.05), kMinSimpsonSteps, kMaxSimpsonSteps);
+  const double h = p_end / steps;
+  std::vector<double> ps{0.0}, ss{0.0};
+  for (int i = 1; i <= 4 * steps && ss.back() < g.length; ++i) {
     const double a = (i - 1) * h, b = i * h;
-    us[static_cast<std::size_t>(i)] = b;
-    ss[static_cast<std::size_t>(i)] = ss[static_cast<std::size_t>(i - 1)] +
-                                       h / 6 * (speed(a) + 4 * speed(0.5 * (a + b)) + speed(b));
+    ps.push_back(b);
+    ss.push_back(ss.back() + h / 6 * (speed(a) + 4 * speed(0.5 * (a + b)) + speed(b)));
   }
-  g.arc_table.assign(kArcTableSize + 1, 0.0);
+  const int size = std::clamp(static_cast<int>(g.length / kArcTableStep), kArcTableSize, kMaxArcTableSize);
+  g.arc_table.assign(static_cast<std::size_t>(size) + 1, 0.0);
   std::size_t j = 0;
-  for (int k = 0; k <= kArcTableSize; ++k) {
-    const double target = g.length * k / kArcTableSize;
+  for (int k = 0; k <= size; ++k) {
+    const double target = g.length * k / size;
     while (j + 1 < ss.size() && ss[j + 1] < target) ++j;
-    if (j + 1 >= ss.size()) {
-      g.arc_table[static_cast<std::size_t>(k)] = us.back();
+    if (j + 1 >= ss.size()) {  // the curve stops moving before `length`
+      g.arc_table[static_cast<std::size_t>(k)] = ps.back();
       continue;
     }
     const double span = ss[j + 1] - ss[j];
     const double w = span > 0 ? (target - ss[j]) / span : 0.0;
-    g.arc_table[static_cast<std::size_t>(k)] = us[j] + std::clamp(w, 0.0, 1.0) * h;
+    g.arc_table[static_cast<std::size_t>(k)] = ps[j] + std::clamp(w, 0.0, 1.0) * h;
   }
 }
 

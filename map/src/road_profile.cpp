@@ -13,6 +13,13 @@ double EvalPoly3Sequence(const std::vector<Poly3>& polys, double s, double fallb
   return it->Eval(s - it->s);
 }
 
+double EvalPoly3SequenceSlope(const std::vector<Poly3>& polys, double s) {
+  auto it = std::upper_bound(polys.begin(), polys.end(), s, [](double v, const Poly3& p) { return v < p.s; });
+  if (it == polys.begin()) return 0.0;
+  --it;
+  return it->Slope(s - it->s);
+}
+
 double RoadElevation(const Road& road, double s) { return EvalPoly3Sequence(road.elevation, s); }
 double RoadSlope(const Road& road, double s) {
   const auto& e = road.elevation;
@@ -78,6 +85,65 @@ LaneSpan LaneSpanOf(const Road& road, std::size_t section, int lane_id, double s
     const double w = LaneWidth(*sec.Find(id), ds);
     if (id == lane_id) return LaneSpan{id, t, t + step * w};
     t += step * w;
+  }
+}
+
+void EvalPoly3SequenceWithSlope(const std::vector<Poly3>& polys, double s, double* value, double* slope) {
+  if (polys.empty()) {
+    *value = 0;
+    *slope = 0;
+    return;
+  }
+  auto it = std::upper_bound(polys.begin(), polys.end(), s, [](double v, const Poly3& p) { return v < p.s; });
+  if (it == polys.begin()) {
+    *value = polys.front().Eval(0.0);
+    *slope = 0;
+    return;
+  }
+  --it;
+  *value = it->Eval(s - it->s);
+  *slope = it->Slope(s - it->s);
+}
+
+LaneCentre LaneCentreOf(const Road& road, std::size_t section, int lane_id, double s) {
+  LaneCentre out;
+  if (section >= road.sections.size()) return out;
+  const LaneSection& sec = road.sections[section];
+  const double ds = s - sec.s;
+  double t, dt;
+  EvalPoly3SequenceWithSlope(road.lane_offset, s, &t, &dt);
+  out.t = t;
+  out.dt = dt;
+  if (lane_id == 0 || !sec.Find(lane_id)) return out;
+  const int step = lane_id > 0 ? 1 : -1;
+  for (int id = step;; id += step) {
+    double w, w_slope;
+    EvalPoly3SequenceWithSlope(sec.Find(id)->widths, ds, &w, &w_slope);
+    if (!(w > 0)) w = w_slope = 0;  // negative widths are clamped to zero (LaneWidth)
+    if (id == lane_id) {
+      out.t = t + step * 0.5 * w;
+      out.dt = dt + step * 0.5 * w_slope;
+      out.width = w;
+      return out;
+    }
+    t += step * w;
+    dt += step * w_slope;
+  }
+}
+
+double LaneCenterSlope(const Road& road, std::size_t section, int lane_id, double s) {
+  if (section >= road.sections.size()) return 0.0;
+  const LaneSection& sec = road.sections[section];
+  const double ds = s - sec.s;
+  double slope = EvalPoly3SequenceSlope(road.lane_offset, s);
+  if (lane_id == 0 || !sec.Find(lane_id)) return slope;
+  const int step = lane_id > 0 ? 1 : -1;
+  for (int id = step;; id += step) {
+    const Lane& l = *sec.Find(id);
+    // LaneWidth clamps negative widths to zero; a clamped width does not change.
+    const double w_slope = EvalPoly3Sequence(l.widths, ds) > 0 ? EvalPoly3SequenceSlope(l.widths, ds) : 0.0;
+    if (id == lane_id) return slope + step * 0.5 * w_slope;
+    slope += step * w_slope;
   }
 }
 

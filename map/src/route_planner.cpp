@@ -206,12 +206,13 @@ class Planner {
         // Space the points by distance along the lane centre, not along the reference
         // line: in a bend a lane at offset t is (1 - curvature * t) times as long, and
         // widening lanes move sideways. Start from that estimate, then shrink to the chord.
-        const double t = LaneSpanOf(road, static_cast<std::size_t>(n.section), n.lane, s).Center();
+        const double t = LaneCentreOf(road, static_cast<std::size_t>(n.section), n.lane, s).t;
         const double stretch = std::max(0.2, 1.0 - EvaluateReferenceLine(road.plan_view, s).curvature * t);
         double ds = o_.resolution_m / stretch;
         for (int it = 0; it < 4; ++it) {
           const double probe = std::min(ds, span - d);
-          const Eigen::Vector3d q = m_.MakeWaypoint(n.road, n.section, n.lane, s + sign * probe).transform.location;
+          const double sq = s + sign * probe;  // the lane centre there (a whole waypoint is not needed)
+          const Eigen::Vector3d q = RoadToWorld(road, sq, LaneCentreOf(road, static_cast<std::size_t>(n.section), n.lane, sq).t);
           const double chord = (q - step.waypoint.transform.location).norm();
           if (chord <= o_.resolution_m * 1.01) break;
           ds = probe * o_.resolution_m / chord;
@@ -221,7 +222,7 @@ class Planner {
         if (route.steps.size() > kMaxSteps) return route;
         step.option = first_of_leg && l.into != RoadOption::LaneFollow ? l.into : command[i];
         first_of_leg = false;
-        route.steps.push_back(step);
+        route.steps.push_back(std::move(step));
       }
       if (last) route.steps.push_back(RouteStep{m_.MakeWaypoint(n.road, n.section, n.lane, l.to), command[i]});
     }

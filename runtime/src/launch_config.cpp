@@ -120,7 +120,7 @@ msg::DroneCommandKind DroneKind(YamlMap& m, const std::string& name) {
   return it->second;
 }
 
-// One scenario step: {frame, spawn, as, at, yaw, attributes} or {frame, actor, drone, ...}.
+// One scenario step: {frame, spawn, as, at, yaw, attributes, parent} or {frame, actor, drone, ...}.
 ScheduledCommand LoadStep(YamlMap m, uint64_t index) {
   ScheduledCommand s;
   s.command.client("scenario");
@@ -137,6 +137,7 @@ ScheduledCommand LoadStep(YamlMap m, uint64_t index) {
     m.Get("yaw", &yaw);
     std::map<std::string, std::string> attrs;
     m.Get("attributes", &attrs);
+    m.Get("parent", &s.actor_alias);  // attach to this actor (by alias): `at` and `yaw` are then relative to it
     body = SpawnBody(spawn, MakePose(at.x(), at.y(), at.z(), yaw), AttributeList(attrs.begin(), attrs.end()));
   } else if (m.Get("drone", &drone)) {
     msg::DroneCommand d;

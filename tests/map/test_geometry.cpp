@@ -89,18 +89,22 @@ TEST(map_geometry, ClothoidFromZeroCurvatureIsFresnel) {
 TEST(map_geometry, Poly3AndParamPoly3) {
   Geometry g;
   g.kind = GeometryKind::ParamPoly3;
+  g.p_range_normalized = false;
   g.hdg = 0.5;
-  g.length = 10;
-  g.bu = 1.0;  // u = p, v = 0.01 p^2 (arcLength range)
+  g.bu = 1.0;  // u = p, v = 0.01 p^2 (arcLength range); its arc length to p = 10 in closed form:
   g.cv = 0.01;
-  Pose2 p = EvaluateGeometry(g, 10);
-  EXPECT_NEAR(p.x, 10 * std::cos(0.5) - 1.0 * std::sin(0.5), 1e-12);
-  EXPECT_NEAR(p.y, 10 * std::sin(0.5) + 1.0 * std::cos(0.5), 1e-12);
-  g.p_range_normalized = true;
+  g.length = 5 * std::sqrt(1.04) + std::asinh(0.2) / 0.04;
+  PrepareGeometry(g);
+  Pose2 p = EvaluateGeometry(g, g.length);
+  EXPECT_NEAR(p.x, 10 * std::cos(0.5) - 1.0 * std::sin(0.5), 1e-6);
+  EXPECT_NEAR(p.y, 10 * std::sin(0.5) + 1.0 * std::cos(0.5), 1e-6);
+  EXPECT_NEAR(p.hdg, 0.5 + std::atan(0.2), 1e-6);
+  g.p_range_normalized = true;  // the same curve over p in [0, 1]
   g.bu = 10.0;
   g.cv = 1.0;
-  p = EvaluateGeometry(g, 10);
-  EXPECT_NEAR(p.x, 10 * std::cos(0.5) - 1.0 * std::sin(0.5), 1e-12);
+  PrepareGeometry(g);
+  p = EvaluateGeometry(g, g.length);
+  EXPECT_NEAR(p.x, 10 * std::cos(0.5) - 1.0 * std::sin(0.5), 1e-6);
   // poly3: straight line v = 0.5 u has arc length sqrt(1.25) per u.
   Geometry q;
   q.kind = GeometryKind::Poly3;

@@ -44,6 +44,22 @@ struct TrafficLightInfo {
   std::vector<Waypoint> stop_waypoints;  // one per controlled lane, at the lane's end (stop line)
 };
 
+// Axis-aligned box in the world frame, like carla.BoundingBox with zero rotation.
+struct BoundingBox {
+  Eigen::Vector3d location = Eigen::Vector3d::Zero();  // centre (m, ENU)
+  Eigen::Vector3d extent = Eigen::Vector3d::Zero();    // half sizes along x, y, z (m)
+};
+
+// A junction, like carla.Junction. Its (entry, exit) waypoint pairs come from
+// Map::JunctionWaypoints(index, lane_types) (carla.Junction.get_waypoints).
+struct JunctionInfo {
+  int index = -1;            // index into OpenDrive::junctions
+  std::string id;            // OpenDRIVE <junction id> (carla.Junction.id)
+  // Bounds of the lane centres of every lane (any type) of its connecting roads, as
+  // CARLA computes carla.Junction.bounding_box.
+  BoundingBox bounding_box;
+};
+
 class SegmentIndex;  // spatial index over lane-centre segments (map_queries.cpp)
 
 // An OpenDRIVE road network with CARLA-style queries. Immutable after construction.
@@ -63,8 +79,20 @@ class Map {
   int NodeOf(int road, int section, int lane) const;  // -1 if none
   int NodeOf(const Waypoint& wp) const { return NodeOf(wp.road, wp.section, wp.lane); }
 
-  // Builds a waypoint; s is clamped to the section. Section -1 picks it from s.
+  // Road index of an OpenDRIVE road id, -1 if there is none.
+  int RoadIndex(const std::string& road_id) const;
+
+  // Builds a waypoint from indices; s is clamped to the section. Section -1 picks it
+  // from s. Does not check that the lane exists (then lane_type is None): use
+  // WaypointXodr for input from outside.
   Waypoint MakeWaypoint(int road, int section, int lane, double s) const;
+
+  // Waypoint from OpenDRIVE ids, like CARLA's map.get_waypoint_xodr(road_id, lane_id, s):
+  // nothing when the road does not exist, s is outside [0, road length), or no lane
+  // section at s has that lane (lane 0, the centre lane, gives nothing: it has no
+  // centre line to drive). Where two sections meet, the one holding the lane is used.
+  std::optional<Waypoint> WaypointXodr(const std::string& road_id, int lane_id, double s) const;
+  std::optional<Waypoint> WaypointXodr(int road_id, int lane_id, double s) const;  // numeric id
 
   // Nearest lane-centre point whose lane type is in `types` (CARLA get_waypoint with
   // project_to_road=true). With project_to_road=false, the lane that contains the
@@ -78,8 +106,14 @@ class Map {
   // empty at a dead end. Previous() walks against the travel direction.
   std::vector<Waypoint> Next(const Waypoint& wp, double distance) const;
   std::vector<Waypoint> Previous(const Waypoint& wp, double distance) const;
-  // Waypoints every `distance` metres along the lane to its end (CARLA next_until_lane_end).
+  // CARLA's next_until_lane_end: waypoints every `distance` metres in the travel
+  // direction while the lane continues on one branch of the same road, then the point
+  // where it leaves the road (its last lane section's end). The start is not included.
+  // Empty for an unknown lane or distance <= 0.
   std::vector<Waypoint> NextUntilLaneEnd(const Waypoint& wp, double distance) const;
+  // CARLA's previous_until_lane_start: the same against the travel direction, ending
+  // where the lane enters the road.
+  std::vector<Waypoint> PreviousUntilLaneStart(const Waypoint& wp, double distance) const;
 
   // Neighbouring lanes relative to the travel direction (may travel the other way).
   std::optional<Waypoint> LeftLane(const Waypoint& wp) const;
@@ -93,8 +127,15 @@ class Map {
   // (entry, exit) waypoint of every driving lane section, like CARLA get_topology().
   std::vector<std::pair<Waypoint, Waypoint>> Topology() const;
   // (entry, exit) of every lane of a junction's connecting roads, like carla.Junction.get_waypoints.
+  // `junction` is the junction's index (JunctionInfo::index, Waypoint::junction).
   std::vector<std::pair<Waypoint, Waypoint>> JunctionWaypoints(int junction,
                                                                LaneTypeMask types = LaneType::Driving) const;
+  // Every junction in file order (index i describes OpenDrive::junctions[i]).
+  const std::vector<JunctionInfo>& Junctions() const { return junctions_; }
+  // The junction a waypoint is in (carla.Waypoint.get_junction()), nothing outside junctions.
+  std::optional<JunctionInfo> JunctionOf(const Waypoint& wp) const;
+  // The junction with an OpenDRIVE id, if any.
+  std::optional<JunctionInfo> JunctionById(const std::string& junction_id) const;
   // Vehicle spawn points on driving lanes outside junctions, every ~`spacing` metres,
   // 0.5 m above the road. Deterministic.
   std::vector<Transform> SpawnPoints(double spacing = 25.0) const;
@@ -119,7 +160,9 @@ class Map {
 
  private:
   void BuildGraph();
+  void BuildJunctions();
   void LinkRoadEnd(int node_id, bool at_end);
+  std::vector<Waypoint> UntilRoadEnd(const Waypoint& wp, double distance, bool forward) const;
   static constexpr int kWalkBudget = 20000;  // lane nodes visited by one Next/Previous at most
   std::vector<Waypoint> Walk(const Waypoint& wp, double distance, bool forward, int* budget) const;
   std::optional<Waypoint> Neighbour(const Waypoint& wp, int lane) const;
@@ -131,6 +174,7 @@ class Map {
   std::vector<std::vector<int>> node_lookup_;  // [road][section * stride + lane + offset]
   std::vector<int> lookup_offset_, lookup_stride_;
   std::unique_ptr<SegmentIndex> index_;
+  std::vector<JunctionInfo> junctions_;
   Eigen::Vector2d bounds_min_ = Eigen::Vector2d::Zero(), bounds_max_ = Eigen::Vector2d::Zero();
 };
 

@@ -58,7 +58,13 @@ struct Lane {
   int id = 0;  // >0 left of the reference line, <0 right, 0 centre
   LaneType type = LaneType::None;
   bool level = false;
-  std::vector<Poly3> widths;        // s = sOffset within the section
+  // Width records, s = sOffset within the section. For a lane given by <border>
+  // records instead, the reader derives these from the borders (see borders).
+  std::vector<Poly3> widths;
+  // <border> records as read: the t coordinate (m, from the road's reference line,
+  // positive left) of the lane's outer edge, s = sOffset within the section. Used only
+  // when the lane has no <width> (OpenDRIVE: width takes precedence).
+  std::vector<Poly3> borders;
   std::vector<RoadMark> marks;      // outer border of this lane, sorted by s_offset
   std::vector<int> predecessors;    // lane ids in the previous section/road (s direction)
   std::vector<int> successors;
@@ -75,6 +81,7 @@ struct LaneSection {
     if (idx < 0 || idx >= static_cast<int>(lanes.size())) return nullptr;
     return &lanes[static_cast<std::size_t>(idx)];
   }
+  Lane* Find(int id) { return const_cast<Lane*>(static_cast<const LaneSection*>(this)->Find(id)); }
 };
 
 enum class ContactPoint { None, Start, End };

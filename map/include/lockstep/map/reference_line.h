@@ -18,8 +18,12 @@ struct Geometry {
   double a = 0, b = 0, c = 0, d = 0;       // poly3: v(u) = a + b u + c u^2 + d u^3
   double au = 0, bu = 0, cu = 0, du = 0;   // paramPoly3 u(p)
   double av = 0, bv = 0, cv = 0, dv = 0;   // paramPoly3 v(p)
-  bool p_range_normalized = false;         // paramPoly3 pRange="normalized": p in [0,1]
-  std::vector<double> arc_table;           // poly3: u at equal arc-length steps (filled by Prepare)
+  // paramPoly3 pRange: "normalized" (p in [0, 1]) or "arcLength" (p in [0, length]).
+  // A missing pRange means normalized, as in OpenDRIVE 1.4 and CARLA's reader.
+  bool p_range_normalized = true;
+  // poly3: u, paramPoly3: p, at equal arc-length steps over [0, length] (filled by
+  // PrepareGeometry), so both are evaluated by true arc length.
+  std::vector<double> arc_table;
 };
 
 struct Pose2 {

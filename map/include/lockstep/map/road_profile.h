@@ -9,6 +9,10 @@
 namespace lockstep::map {
 
 double EvalPoly3Sequence(const std::vector<Poly3>& polys, double s, double fallback = 0.0);
+// d/ds of EvalPoly3Sequence (0 before the first record and for an empty sequence).
+double EvalPoly3SequenceSlope(const std::vector<Poly3>& polys, double s);
+// Both at once, from one record lookup (fallback 0).
+void EvalPoly3SequenceWithSlope(const std::vector<Poly3>& polys, double s, double* value, double* slope);
 double RoadElevation(const Road& road, double s);
 double RoadSlope(const Road& road, double s);  // dz/ds
 double RoadLaneOffset(const Road& road, double s);
@@ -28,6 +32,16 @@ struct LaneSpan {
 void LaneSpans(const Road& road, std::size_t section, double s, std::vector<LaneSpan>* out);
 // Span of one lane (zero-width span if the id does not exist).
 LaneSpan LaneSpanOf(const Road& road, std::size_t section, int lane_id, double s);
+// One lane's centre line at road coordinate s, in one pass over the cross-section.
+struct LaneCentre {
+  double t = 0;      // lateral position of the centre (m, positive left)
+  double width = 0;  // lane width (m)
+  double dt = 0;     // dt/ds of the centre (the slope of the lateral offset)
+};
+LaneCentre LaneCentreOf(const Road& road, std::size_t section, int lane_id, double s);
+// dt/ds of the lane centre's t at road coordinate s: the laneOffset slope plus the
+// width slopes of the lanes inside it and half its own (0 if the id does not exist).
+double LaneCenterSlope(const Road& road, std::size_t section, int lane_id, double s);
 
 // World position (ENU) of road coordinate (s, t) and the reference heading there.
 Eigen::Vector3d RoadToWorld(const Road& road, double s, double t, double* heading = nullptr);

@@ -26,11 +26,17 @@ struct LaneMarking {
   double width = 0;                           // (m)
 };
 
-// A point on a lane centre, CARLA-style. (road, section, lane, s) identify it;
-// the rest is derived by Map::MakeWaypoint.
+// A point on a lane centre, CARLA-style (carla.Waypoint). (road, section, lane, s)
+// identify it; the rest is derived by Map::MakeWaypoint / Map::WaypointXodr.
+//
+// Indices vs OpenDRIVE ids: `road` and `junction` index OpenDrive::roads/junctions;
+// `road_id` and `junction_id` are the ids written in the file (CARLA's
+// waypoint.road_id / junction_id). `section` is the lane section's index within its
+// road, which is also CARLA's section_id (OpenDRIVE sections have no ids). `lane` is
+// the OpenDRIVE lane id (CARLA's lane_id).
 struct Waypoint {
   int road = -1;      // index into OpenDrive::roads
-  int section = -1;   // index into Road::sections
+  int section = -1;   // index into Road::sections (= CARLA section_id)
   int lane = 0;       // OpenDRIVE lane id; negative lanes travel with s, positive against
   double s = 0;       // road coordinate (m)
   // Derived:
@@ -39,6 +45,9 @@ struct Waypoint {
   double lane_width = 0;          // (m)
   LaneType lane_type = LaneType::None;
   int junction = -1;              // junction index, -1 if the road is not inside one
+  std::string road_id;            // OpenDRIVE <road id>
+  std::string junction_id = "-1"; // OpenDRIVE <junction id>, "-1" if the road is not inside one
+  int SectionId() const { return section; }  // CARLA's section_id
   bool IsJunction() const { return junction >= 0; }
   bool Valid() const { return road >= 0; }
 };

@@ -26,7 +26,7 @@ msg::WorldSettings DefaultWorldSettings();
 struct ScheduledCommand {
   uint64_t frame = 1;          // applied in the tick that produces this frame
   std::string alias;           // spawn: a name later steps use in `actor`
-  std::string actor_alias;     // the actor this command addresses, by alias (filled in at run time)
+  std::string actor_alias;     // the actor this command addresses (a spawn: its parent), by alias (filled in at run time)
   msg::Command command;        // client "scenario"
 };
 

@@ -15,7 +15,8 @@
   X(BlueprintSet) X(SpawnCheck) X(SpawnCheckReply)                                      \
   X(WorldInfo) X(MapData) X(Command) X(CommandReply) X(GroundState) X(AirState)          \
   X(SimEvent) X(Image) X(PointCloud) X(RadarScan) X(Imu) X(Gnss) X(Barometer)            \
-  X(Magnetometer) X(CollisionEvent) X(LaneInvasionEvent) X(ObstacleDetection) X(PhysicsEvents)
+  X(Magnetometer) X(CollisionEvent) X(LaneInvasionEvent) X(ObstacleDetection) X(PhysicsEvents) \
+  X(DistanceMeasurement)
 
 namespace lockstep {
 
@@ -60,6 +61,7 @@ inline constexpr Topic<msg::Magnetometer> kMagnetometer{"lockstep/sensor/magneto
 inline constexpr Topic<msg::CollisionEvent> kCollision{"lockstep/sensor/collision", QosKind::kEvent};
 inline constexpr Topic<msg::LaneInvasionEvent> kLaneInvasion{"lockstep/sensor/lane_invasion", QosKind::kEvent};
 inline constexpr Topic<msg::ObstacleDetection> kObstacle{"lockstep/sensor/obstacle", QosKind::kSensor};
+inline constexpr Topic<msg::DistanceMeasurement> kDistance{"lockstep/sensor/distance", QosKind::kSensor};
 }  // namespace topics
 
 }  // namespace lockstep

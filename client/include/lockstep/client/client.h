@@ -1,0 +1,205 @@
+#pragma once
+// The C++ client of a running Lockstep simulation: the world (settings, ticks, weather,
+// reset, maps), actors (spawn, destroy, state), batches of commands with per-command
+// replies, sensors (listen / stop with the no-lost-frames guarantee) and drones
+// (lockstep/client/multirotor.h). Everything goes over the DDS topics of idl/; Fast DDS
+// stays behind the runtime's Bus. Poses are world ENU, metres, radians (the wire's
+// convention); the Python layers convert to CARLA's and AirSim's.
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "lockstep/client/blueprint_library.h"
+#include "lockstep/client/sensor_data.h"
+#include "lockstep/runtime/command_builders.h"
+#include "lockstep/runtime/messages.h"
+
+namespace lockstep::map {
+class Map;
+}
+
+namespace lockstep::client {
+
+// No simulation, a timeout, or a broken call. The message says what and why.
+class ClientError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+// The coordinator (or the owning service) rejected a command; reason() is its reply.
+class CommandRejected : public ClientError {
+ public:
+  CommandRejected(const std::string& what, std::string reason) : ClientError(what), reason_(std::move(reason)) {}
+  const std::string& reason() const { return reason_; }
+
+ private:
+  std::string reason_;
+};
+
+// tick() finished frame k but some listened sensors had not delivered their data of k
+// within ClientOptions::sensor_timeout_s. Their data is still delivered once, in order,
+// when it arrives.
+class SensorLate : public ClientError {
+ public:
+  SensorLate(const std::string& what, std::vector<uint32_t> sensors, uint64_t frame)
+      : ClientError(what), sensors_(std::move(sensors)), frame_(frame) {}
+  const std::vector<uint32_t>& sensors() const { return sensors_; }
+  uint64_t frame() const { return frame_; }
+
+ private:
+  std::vector<uint32_t> sensors_;
+  uint64_t frame_;
+};
+
+struct ClientOptions {
+  int domain = -1;               // DDS domain; -1 = $LOCKSTEP_DOMAIN, else 0
+  double timeout_s = 10;         // s, to find the simulation and for each command reply
+  double tick_timeout_s = 60;    // s, for one tick to complete
+  double sensor_timeout_s = 10;  // s, how long tick() waits for a listened sensor's frame
+  double state_timeout_s = 2;    // s, how long tick() waits for the frame's ground / air state
+  std::string name;              // unique client name; empty = "client-<host>-<pid>-<n>"
+  Bus* bus = nullptr;            // an existing bus (tests: the in-process bus); null = a new DDS participant
+};
+
+// An actor of the current run: what its spawn said (from the ticks and our replies).
+struct ActorInfo {
+  uint32_t id = 0;
+  std::string blueprint;
+  msg::ActorKind kind = msg::ActorKind::ACTOR_OTHER;
+  uint32_t parent = 0;
+  std::string owner;                       // the service that simulates it
+  AttributeList attributes;                // as spawned
+  msg::Pose spawn_pose;                    // world ENU (parent frame if parent != 0)
+  uint64_t spawn_frame = 0;                // the frame whose tick carried the spawn
+  std::string Attribute(const std::string& key, const std::string& fallback = "") const;
+};
+
+// Kinematic state of one actor in a frame, whatever service simulates it.
+struct ActorState {
+  uint32_t id = 0;
+  std::string blueprint;
+  msg::ActorKind kind = msg::ActorKind::ACTOR_OTHER;
+  msg::Pose transform;          // world ENU
+  msg::Vector3 velocity;        // m/s, world
+  msg::Vector3 angular_velocity;  // rad/s (world for ground actors, body for drones)
+  msg::Vector3 acceleration;    // m/s^2, world
+  msg::Vector3 half_extents;    // m
+};
+
+// The world at one frame: the latest ground and air state of that frame.
+struct Snapshot {
+  uint32_t run = 0;
+  uint64_t frame = 0;
+  double sim_time = 0;                        // s
+  std::optional<msg::GroundState> ground;     // absent: no ground service
+  std::optional<msg::AirState> air;           // absent: no air service
+  std::vector<ActorState> Actors() const;
+  std::optional<ActorState> Find(uint32_t id) const;
+  const msg::VehicleState* Vehicle(uint32_t id) const;
+  const msg::WalkerState* Walker(uint32_t id) const;
+  const msg::DroneState* Drone(uint32_t id) const;
+  const msg::TrafficLightState* TrafficLight(uint32_t id) const;
+};
+
+using SensorCallback = std::function<void(const SensorSample&)>;
+
+class Client {
+ public:
+  // Connects: waits up to options.timeout_s for the coordinator's WorldInfo and for
+  // the command topics to match. Throws ClientError naming the domain otherwise.
+  explicit Client(ClientOptions options = {});
+  ~Client();
+  Client(const Client&) = delete;
+  Client& operator=(const Client&) = delete;
+
+  int domain() const;
+  const std::string& name() const;
+  const ClientOptions& options() const;
+
+  // --- world ---
+  msg::WorldInfo world_info() const;
+  // Waits until every required service has joined (run ready or running); false on timeout.
+  bool wait_ready(double timeout_s);
+  std::optional<msg::RunStatus> run_status() const;
+  uint32_t run() const;
+  uint64_t frame() const;  // last completed frame of the current run (0 = none yet)
+  msg::WorldSettings settings() const;
+  // Applies new settings; returns the frame whose tick first uses them.
+  uint64_t apply_settings(const msg::WorldSettings& settings);
+  void set_weather(const msg::WeatherParameters& weather);
+  // Synchronous mode: runs one tick and returns its frame once it is complete, its
+  // ground / air state has arrived and every listened sensor delivered its data for it
+  // (or throws SensorLate naming the late ones).
+  uint64_t tick();
+  // Any mode: waits for the next completed frame after the current one; returns it.
+  uint64_t wait_for_tick(double timeout_s = -1);
+  // A new run with no actors (seed 0 = keep); returns the new run id.
+  uint32_t reset(uint64_t seed = 0);
+  // Loads a map by .xodr path (or the current map's name to reload), or inline
+  // OpenDRIVE text; returns the new run id.
+  uint32_t load_map(const std::string& name, const std::string& opendrive = "", const std::string& scene = "");
+
+  // --- commands ---
+  // Sends one command and waits for its reply; throws CommandRejected (with the
+  // reason) when rejected and `throw_if_rejected`.
+  msg::CommandReply Submit(msg::CommandBody body, bool throw_if_rejected = true);
+  // Sends every command, then collects every reply, in order (CARLA apply_batch_sync).
+  std::vector<msg::CommandReply> SubmitBatch(const std::vector<msg::CommandBody>& bodies);
+  // Sends without waiting; the reply can be collected with WaitReply.
+  uint64_t Send(msg::CommandBody body);
+  msg::CommandReply WaitReply(uint64_t sequence);
+
+  uint32_t spawn(const std::string& blueprint, const msg::Pose& pose, const AttributeList& attributes = {},
+                 uint32_t parent = 0);
+  // nullopt when rejected; `reason` (if given) receives why.
+  std::optional<uint32_t> try_spawn(const std::string& blueprint, const msg::Pose& pose,
+                                    const AttributeList& attributes = {}, uint32_t parent = 0,
+                                    std::string* reason = nullptr);
+  void destroy(uint32_t actor);
+
+  // --- what exists ---
+  // The union of the services' blueprint declarations (lockstep/blueprints); waits up
+  // to `wait_s` for the first declarations.
+  BlueprintLibrary blueprints(double wait_s = 2) const;
+  std::vector<ActorInfo> actors() const;
+  std::optional<ActorInfo> actor(uint32_t id) const;
+  Snapshot snapshot() const;  // the latest frame's state
+  // The map of the current run, built from lockstep/map (waits up to timeout_s).
+  std::shared_ptr<const map::Map> map();
+
+  // --- sensors ---
+  // Delivers every sample of `sensor` to `callback` once, in frame order, on the
+  // client's dispatch thread. In synchronous mode tick() returns only after the sample
+  // of its frame was delivered (strict perception; pipelined: the frame before).
+  void listen(uint32_t sensor, SensorCallback callback);
+  void stop(uint32_t sensor);
+  bool is_listening(uint32_t sensor) const;
+  // Frames delivered to listen callbacks, per sensor (diagnostics and tests).
+  uint64_t delivered(uint32_t sensor) const;
+
+  // --- drones ---
+  // Latest DroneState of a drone (nullopt if no air state lists it).
+  std::optional<msg::DroneState> drone_state(uint32_t actor) const;
+  // Sends a DroneCommand with a fresh command_id (returned); throws CommandRejected.
+  uint64_t send_drone(msg::DroneCommand command);
+  // Waits until the drone reports `command_id` finished (completed, timed out,
+  // cancelled, rejected) or replaced by a newer command; in synchronous mode it ticks
+  // the world while it waits. Throws ClientError after timeout_s (< 0: none).
+  msg::DroneCommandStatus wait_drone(uint32_t actor, uint64_t command_id, double timeout_s = -1);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+// The domain a client uses when none is given: $LOCKSTEP_DOMAIN, else 0.
+int DefaultDomain();
+const char* CommandKindName(msg::CommandKind kind);
+const char* DroneStatusName(msg::DroneCommandStatus status);
+
+}  // namespace lockstep::client

@@ -1,0 +1,546 @@
+"""carla.Client, World, WorldSettings, WeatherParameters, TrafficManager, snapshots."""
+import glob
+import os
+import threading
+import time
+
+import lockstep
+
+from . import command as _command
+from .actors import ActorList, make_actor
+from .blueprints import BlueprintLibrary
+from .constants import WEATHER_FIELDS, WEATHER_PRESETS
+from .errors import unsupported
+from .geometry import Transform, from_enu_vector, from_wire_pose, to_wire_pose
+from .map import Map
+
+__all__ = ['Client', 'World', 'WorldSettings', 'WeatherParameters', 'TrafficManager', 'WorldSnapshot', 'ActorSnapshot',
+           'Timestamp', 'maps_path']
+
+
+class WorldSettings:
+    def __init__(self, synchronous_mode=False, no_rendering_mode=False, fixed_delta_seconds=None, substepping=True,
+                 max_substep_delta_time=0.01, max_substeps=10, max_culling_distance=0.0, deterministic_ragdolls=True,
+                 tile_stream_distance=3000.0, actor_active_distance=2000.0, spectator_as_ego=True, **lockstep_extra):
+        self.synchronous_mode = synchronous_mode
+        self.no_rendering_mode = no_rendering_mode
+        self.fixed_delta_seconds = fixed_delta_seconds
+        self.substepping = substepping
+        self.max_substep_delta_time = max_substep_delta_time
+        self.max_substeps = max_substeps
+        self.max_culling_distance = max_culling_distance
+        self.deterministic_ragdolls = deterministic_ragdolls
+        self.tile_stream_distance = tile_stream_distance
+        self.actor_active_distance = actor_active_distance
+        self.spectator_as_ego = spectator_as_ego
+        # Lockstep's own: 'strict' / 'pipelined' perception, real-time pacing when free-running.
+        self.perception_mode = lockstep_extra.pop('perception_mode', 'strict')
+        self.real_time_factor = lockstep_extra.pop('real_time_factor', 0.0)
+        if lockstep_extra:
+            raise TypeError('WorldSettings: unknown argument(s) %s' % ', '.join(lockstep_extra))
+
+    @classmethod
+    def _from_wire(cls, d):
+        return cls(synchronous_mode=d['synchronous_mode'], no_rendering_mode=d['no_rendering_mode'],
+                   fixed_delta_seconds=d['fixed_delta_seconds'], substepping=d['max_substeps'] > 1,
+                   max_substep_delta_time=d['max_substep_delta_time'], max_substeps=d['max_substeps'],
+                   perception_mode=d['perception_mode'], real_time_factor=d['real_time_factor'])
+
+    def _to_wire(self):
+        d = {'synchronous_mode': bool(self.synchronous_mode), 'no_rendering_mode': bool(self.no_rendering_mode),
+             'perception_mode': self.perception_mode, 'real_time_factor': float(self.real_time_factor)}
+        # fixed_delta_seconds=None (CARLA's variable step) keeps the current fixed step: Lockstep is always fixed-step.
+        if self.fixed_delta_seconds is not None:
+            d['fixed_delta_seconds'] = float(self.fixed_delta_seconds)
+        if self.substepping:
+            d['max_substep_delta_time'] = float(self.max_substep_delta_time)
+            d['max_substeps'] = int(self.max_substeps)
+        else:
+            d['max_substeps'] = 1
+            d['max_substep_delta_time'] = float(self.fixed_delta_seconds or 0.05)
+        return d
+
+    def __repr__(self):
+        return ('WorldSettings(synchronous_mode=%s, no_rendering_mode=%s, fixed_delta_seconds=%s, substepping=%s, '
+                'max_substep_delta_time=%s, max_substeps=%s)' % (self.synchronous_mode, self.no_rendering_mode,
+                                                                 self.fixed_delta_seconds, self.substepping,
+                                                                 self.max_substep_delta_time, self.max_substeps))
+
+
+class WeatherParameters:
+    def __init__(self, cloudiness=0.0, precipitation=0.0, precipitation_deposits=0.0, wind_intensity=0.0,
+                 sun_azimuth_angle=0.0, sun_altitude_angle=0.0, fog_density=0.0, fog_distance=0.0, wetness=0.0,
+                 fog_falloff=0.0, scattering_intensity=0.0, mie_scattering_scale=0.0, rayleigh_scattering_scale=0.0331,
+                 dust_storm=0.0):
+        for k, v in locals().items():
+            if k != 'self':
+                setattr(self, k, float(v))
+
+    def _to_wire(self):
+        d = {k: getattr(self, k) for k in WEATHER_FIELDS}
+        if all(v == -1.0 for k, v in d.items() if k not in ('scattering_intensity', 'mie_scattering_scale',
+                                                            'rayleigh_scattering_scale', 'dust_storm')):
+            d.update({k: v for k, v in WEATHER_PRESETS['ClearNoon'].items()})  # CARLA's Default = the map's default
+        return d
+
+    def __eq__(self, o):
+        return isinstance(o, WeatherParameters) and all(getattr(self, k) == getattr(o, k) for k in WEATHER_FIELDS)
+
+    def __repr__(self):
+        return 'WeatherParameters(%s)' % ', '.join('%s=%g' % (k, getattr(self, k)) for k in WEATHER_FIELDS)
+
+
+for _name, _values in WEATHER_PRESETS.items():
+    setattr(WeatherParameters, _name, WeatherParameters(**_values))
+
+
+class Timestamp:
+    def __init__(self, frame, elapsed_seconds, delta_seconds):
+        self.frame = frame
+        self.frame_count = frame
+        self.elapsed_seconds = elapsed_seconds
+        self.delta_seconds = delta_seconds
+        self.platform_timestamp = time.time()
+
+    def __repr__(self):
+        return 'Timestamp(frame=%d, elapsed_seconds=%f, delta_seconds=%f)' % (self.frame, self.elapsed_seconds,
+                                                                              self.delta_seconds)
+
+
+class ActorSnapshot:
+    def __init__(self, state):
+        self.id = state['id']
+        self._s = state
+
+    def get_transform(self):
+        return from_wire_pose(self._s['transform'])
+
+    def get_velocity(self):
+        return from_enu_vector(self._s['velocity'])
+
+    def get_angular_velocity(self):
+        return from_enu_vector(self._s['angular_velocity'])
+
+    def get_acceleration(self):
+        return from_enu_vector(self._s['acceleration'])
+
+
+class WorldSnapshot:
+    def __init__(self, world):
+        client = world._client
+        run, frame, sim_time, _, _ = client.snapshot_frame()
+        self.id = run
+        self.frame = frame
+        self.timestamp = Timestamp(frame, sim_time, world._dt())
+        self._states = {k: ActorSnapshot(v) for k, v in client.states().items()}
+
+    def find(self, actor_id):
+        return self._states.get(actor_id)
+
+    def has_actor(self, actor_id):
+        return actor_id in self._states
+
+    def __iter__(self):
+        return iter(self._states.values())
+
+    def __len__(self):
+        return len(self._states)
+
+
+def maps_path():
+    """Where load_world looks for <name>.xodr: $LOCKSTEP_MAPS_PATH (':'-separated), the
+    generated towns of the build, and the shared CARLA towns."""
+    dirs = [d for d in os.environ.get('LOCKSTEP_MAPS_PATH', '').split(':') if d]
+    here = os.path.dirname(os.path.abspath(lockstep.__file__))   # build/python/lockstep
+    build = os.path.dirname(os.path.dirname(here))
+    dirs.append(os.path.join(build, 'maps', 'generated'))
+    dirs.append(os.path.join(os.path.dirname(os.path.dirname(build)), 'shared', 'maps', 'carla'))
+    return dirs
+
+
+class Client:
+    """carla.Client. Host and port are accepted and ignored: the simulation is found on the
+    DDS domain $LOCKSTEP_DOMAIN (default 0), on this machine or any other on the network."""
+
+    def __init__(self, host='localhost', port=2000, worker_threads=0):
+        self.host, self.port = host, port
+        self._timeout = float(os.environ.get('LOCKSTEP_CONNECT_TIMEOUT', '10'))
+        self._native = None
+        self._world = None
+
+    def _client(self):
+        if self._native is None:
+            self._native = lockstep.Client(timeout=self._timeout)
+        return self._native
+
+    def set_timeout(self, seconds):
+        self._timeout = float(seconds)
+
+    def get_client_version(self):
+        return '0.9.15-lockstep'
+
+    def get_server_version(self):
+        self._client()
+        return '0.9.15-lockstep'
+
+    def get_world(self):
+        if self._world is None:
+            self._world = World(self._client(), self)
+        return self._world
+
+    def get_available_maps(self):
+        names = []
+        for d in maps_path():
+            names += [os.path.splitext(os.path.basename(p))[0] for p in sorted(glob.glob(os.path.join(d, '*.xodr')))]
+        return names
+
+    def _find_map(self, name):
+        base = os.path.basename(name.rstrip('/'))
+        if os.path.isfile(name):
+            return os.path.abspath(name)
+        for d in maps_path():
+            p = os.path.join(d, base if base.endswith('.xodr') else base + '.xodr')
+            if os.path.isfile(p):
+                return p
+        raise RuntimeError("map '%s' not found in %s (set LOCKSTEP_MAPS_PATH)" % (name, ':'.join(maps_path())))
+
+    def load_world(self, map_name, reset_settings=True, map_layers=None):
+        c = self._client()
+        c.load_map(self._find_map(map_name))
+        return self.get_world()
+
+    def load_world_if_different(self, map_name, reset_settings=True, map_layers=None):
+        if self.get_world().get_map().name == os.path.splitext(os.path.basename(map_name))[0]:
+            return None
+        return self.load_world(map_name, reset_settings, map_layers)
+
+    def reload_world(self, reset_settings=True):
+        self._client().reset(0)
+        return self.get_world()
+
+    def generate_opendrive_world(self, opendrive, parameters=None, reset_settings=True):
+        self._client().load_map('opendrive', opendrive)
+        return self.get_world()
+
+    def get_trafficmanager(self, client_connection=8000):
+        return TrafficManager(self.get_world(), client_connection)
+
+    def _run(self, commands, due_tick_cue):
+        world = self.get_world()
+        c = self._client()
+        replies = c.submit_batch([cmd.to_dict() for cmd in commands])
+        out = []
+        for cmd, (ok, reason, actor, _) in zip(commands, replies):
+            actor_id = actor if ok else 0
+            if ok and getattr(cmd, '_then', None):
+                for follow in c.submit_batch([t.to_dict(actor_id) for t in cmd._then]):
+                    if not follow[0]:
+                        reason = follow[1]
+            out.append(_command.Response(actor_id if not reason else actor_id, reason))
+        if due_tick_cue and world.get_settings().synchronous_mode:
+            world.tick()
+        return out
+
+    def apply_batch(self, commands):
+        self._run(commands, False)
+
+    def apply_batch_sync(self, commands, due_tick_cue=False):
+        return self._run(commands, due_tick_cue)
+
+    def start_recorder(self, filename, additional_data=False):
+        unsupported('Client.start_recorder', "add the recorder service to the launch config (it writes every frame's "
+                    'world state to CSV)')
+
+    def stop_recorder(self):
+        unsupported('Client.stop_recorder', 'the recorder is a service of the launch config')
+
+    def replay_file(self, *args, **kwargs):
+        unsupported('Client.replay_file', 'replays are tick-log replays of a service, not a client call')
+
+    def show_recorder_file_info(self, *args, **kwargs):
+        unsupported('Client.show_recorder_file_info', 'the recorder writes CSV files; read them directly')
+
+
+class _Spectator:
+    """CARLA's spectator is the Unreal viewport camera. Lockstep has no viewport: this one
+    only remembers its transform (documented as partly supported)."""
+
+    def __init__(self):
+        self.id = 0
+        self.type_id = 'spectator'
+        self._t = Transform()
+
+    def get_transform(self):
+        return self._t
+
+    def set_transform(self, t):
+        self._t = t
+
+    def get_location(self):
+        return self._t.location
+
+
+class World:
+    def __init__(self, native, carla_client):
+        self._client = native
+        self._carla_client = carla_client
+        self._actors = {}
+        self._map = None
+        self._map_key = None
+        self._bp_cache = None
+        self._spectator = _Spectator()
+        self._on_tick = {}
+        self._next_cb = 1
+
+    @property
+    def id(self):
+        return self._client.run()
+
+    def _dt(self):
+        return self._client.world_info()['settings']['fixed_delta_seconds']
+
+    def _require(self, kind, call):
+        st = self._client.run_status()
+        if st is None or not any(k == kind and alive for _, k, alive, _ in st['members']):
+            unsupported(call, 'no %s service is running in this simulation' % kind)
+
+    # --- settings and time ---
+    def get_settings(self):
+        return WorldSettings._from_wire(self._client.world_info()['settings'])
+
+    def apply_settings(self, settings):
+        return self._client.apply_settings(settings._to_wire())
+
+    def tick(self, seconds=10.0):
+        return self._client.tick()
+
+    def wait_for_tick(self, seconds=10.0):
+        self._client.wait_for_tick(seconds)
+        return WorldSnapshot(self)
+
+    def on_tick(self, callback):
+        cb_id = self._next_cb
+        self._next_cb += 1
+        stop = threading.Event()
+
+        def loop():
+            while not stop.is_set():
+                try:
+                    self._client.wait_for_tick(1.0)
+                except lockstep.ClientError:
+                    continue
+                if not stop.is_set():
+                    callback(WorldSnapshot(self))
+
+        t = threading.Thread(target=loop, daemon=True)
+        self._on_tick[cb_id] = stop
+        t.start()
+        return cb_id
+
+    def remove_on_tick(self, callback_id):
+        stop = self._on_tick.pop(callback_id, None)
+        if stop:
+            stop.set()
+
+    def get_snapshot(self):
+        return WorldSnapshot(self)
+
+    # --- map, weather ---
+    def get_map(self):
+        info = self._client.world_info()
+        key = (info['run'], info['map_name'])
+        if self._map is None or self._map_key != key:
+            self._map = Map(self._client.map(), info['map_name'])
+            self._map_key = key
+        return self._map
+
+    def get_weather(self):
+        return WeatherParameters(**self._client.world_info()['weather'])
+
+    def set_weather(self, weather):
+        self._client.set_weather(weather._to_wire())
+
+    def get_blueprint_library(self):
+        return BlueprintLibrary(self._client.blueprints())
+
+    def get_spectator(self):
+        return self._spectator
+
+    # --- actors ---
+    def _wrap(self, info):
+        a = self._actors.get(info['id'])
+        if a is None or a.type_id != info['blueprint']:
+            a = make_actor(self, info)
+            self._actors[info['id']] = a
+        return a
+
+    def get_actor(self, actor_id):
+        info = self._client.actor(actor_id)
+        return self._wrap(info) if info else None
+
+    def get_actors(self, actor_ids=None):
+        infos = self._client.actors()
+        if actor_ids is not None:
+            wanted = set(actor_ids)
+            infos = [i for i in infos if i['id'] in wanted]
+        return ActorList(self._wrap(i) for i in infos)
+
+    def _spawn_dict(self, blueprint, transform, attach_to):
+        return {'type': 'spawn', 'blueprint': blueprint.id, 'transform': to_wire_pose(transform),
+                'attributes': blueprint.spawn_attributes(), 'parent': attach_to.id if attach_to is not None else 0}
+
+    def spawn_actor(self, blueprint, transform, attach_to=None, attachment_type=0, bone=None):
+        """Raises lockstep.CommandRejected (a RuntimeError) with the service's reason."""
+        if isinstance(blueprint, str):
+            blueprint = self.get_blueprint_library().find(blueprint)
+        d = self._spawn_dict(blueprint, transform, attach_to)
+        actor_id = self._client.spawn(d['blueprint'], d['transform'], d['attributes'], d['parent'])
+        info = self._client.actor(actor_id) or {'id': actor_id, 'blueprint': blueprint.id, 'kind': blueprint.kind,
+                                                'attributes': d['attributes'], 'parent': d['parent'],
+                                                'spawn_transform': d['transform']}
+        return self._wrap(info)
+
+    def try_spawn_actor(self, blueprint, transform, attach_to=None, attachment_type=0, bone=None):
+        try:
+            return self.spawn_actor(blueprint, transform, attach_to, attachment_type)
+        except lockstep.CommandRejected:
+            return None
+
+    def get_traffic_light(self, landmark):
+        unsupported('World.get_traffic_light', 'landmarks are not exposed over the wire; use get_actors().filter('
+                    "'traffic.traffic_light*')")
+
+    def get_traffic_lights_from_waypoint(self, waypoint, distance):
+        unsupported('World.get_traffic_lights_from_waypoint', 'landmarks are not exposed over the wire')
+
+    def freeze_all_traffic_lights(self, frozen):
+        for a in self.get_actors().filter('traffic.traffic_light*'):
+            a.freeze(frozen)
+
+    def reset_all_traffic_lights(self):
+        unsupported('World.reset_all_traffic_lights', 'no traffic light reset command on the wire')
+
+    def get_random_location_from_navigation(self):
+        import random
+        points = self._client.map().pedestrian_spawn_points(20.0)
+        if not points:
+            return None
+        from .map import _transform
+        return _transform(random.choice(points)).location
+
+    def get_lightmanager(self):
+        unsupported('World.get_lightmanager', 'street and vehicle lights are not simulated')
+
+    def get_level_bbs(self, actor_type=None):
+        unsupported('World.get_level_bbs', 'the static scene is not exposed over the wire')
+
+    def get_environment_objects(self, object_type=None):
+        unsupported('World.get_environment_objects', 'the static scene is not exposed over the wire')
+
+    def cast_ray(self, initial_location, final_location):
+        unsupported('World.cast_ray', 'ray casts run inside the sensors service, not in clients')
+
+    def project_point(self, location, direction, search_distance):
+        unsupported('World.project_point', 'ray casts run inside the sensors service, not in clients')
+
+    def load_map_layer(self, map_layers):
+        unsupported('World.load_map_layer', 'Lockstep towns have no Unreal layers')
+
+    def unload_map_layer(self, map_layers):
+        unsupported('World.unload_map_layer', 'Lockstep towns have no Unreal layers')
+
+    @property
+    def debug(self):
+        return _Debug()
+
+    def __repr__(self):
+        return 'World(id=%d)' % self.id
+
+
+class _Debug:
+    """carla.DebugHelper draws in the Unreal viewport; Lockstep has none."""
+
+    def __getattr__(self, name):
+        def fail(*args, **kwargs):
+            unsupported('DebugHelper.' + name, 'there is no viewport to draw in')
+        return fail
+
+
+class TrafficManager:
+    """carla.TrafficManager: its settings go to ground_sim's Traffic Manager as commands."""
+
+    def __init__(self, world, port=8000):
+        self._world = world
+        self._port = port
+
+    def get_port(self):
+        return self._port
+
+    def _set(self, parameter, value, actor=None, call='TrafficManager'):
+        self._world._require('ground_sim', 'TrafficManager.' + call)
+        self._world._client.submit({'type': 'traffic_manager', 'parameter': parameter,
+                                    'actor': actor.id if actor is not None else 0, 'value': float(value)})
+
+    def set_synchronous_mode(self, mode=True):
+        # Lockstep's Traffic Manager always steps inside the tick: there is nothing to switch.
+        return None
+
+    def set_global_distance_to_leading_vehicle(self, distance):
+        self._set('distance_to_leading_vehicle', distance, call='set_global_distance_to_leading_vehicle')
+
+    def distance_to_leading_vehicle(self, actor, distance):
+        self._set('distance_to_leading_vehicle', distance, actor, 'distance_to_leading_vehicle')
+
+    def global_percentage_speed_difference(self, percentage):
+        self._set('percentage_speed_difference', percentage, call='global_percentage_speed_difference')
+
+    def vehicle_percentage_speed_difference(self, actor, percentage):
+        self._set('percentage_speed_difference', percentage, actor, 'vehicle_percentage_speed_difference')
+
+    def ignore_lights_percentage(self, actor, perc):
+        self._set('ignore_lights_percentage', perc, actor, 'ignore_lights_percentage')
+
+    def ignore_signs_percentage(self, actor, perc):
+        self._set('ignore_signs_percentage', perc, actor, 'ignore_signs_percentage')
+
+    def ignore_vehicles_percentage(self, actor, perc):
+        self._set('ignore_vehicles_percentage', perc, actor, 'ignore_vehicles_percentage')
+
+    def ignore_walkers_percentage(self, actor, perc):
+        self._set('ignore_walkers_percentage', perc, actor, 'ignore_walkers_percentage')
+
+    def auto_lane_change(self, actor, enable):
+        self._set('auto_lane_change', 1 if enable else 0, actor, 'auto_lane_change')
+
+    def set_hybrid_physics_mode(self, enabled=False):
+        if enabled:
+            unsupported('TrafficManager.set_hybrid_physics_mode', 'every vehicle is always fully simulated')
+
+    def set_hybrid_physics_radius(self, r=50.0):
+        self._set('hybrid_physics_radius', r, call='set_hybrid_physics_radius')
+
+    def set_random_device_seed(self, value):
+        self._set('random_seed', value, call='set_random_device_seed')
+
+    def set_respawn_dormant_vehicles(self, mode_switch=True):
+        if mode_switch:
+            unsupported('TrafficManager.set_respawn_dormant_vehicles', 'there are no dormant vehicles in Lockstep')
+
+    def set_osm_mode(self, mode_switch=True):
+        if mode_switch:
+            unsupported('TrafficManager.set_osm_mode', 'OpenStreetMap import is not supported')
+
+    def force_lane_change(self, actor, direction):
+        unsupported('TrafficManager.force_lane_change', 'no forced lane change command on the wire')
+
+    def set_path(self, actor, path):
+        unsupported('TrafficManager.set_path', 'no route command on the wire')
+
+    def set_route(self, actor, path):
+        unsupported('TrafficManager.set_route', 'no route command on the wire')
+
+    def update_vehicle_lights(self, actor, do_update):
+        unsupported('TrafficManager.update_vehicle_lights', 'vehicle lights are not simulated')
+
+    def shut_down(self):
+        return None

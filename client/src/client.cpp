@@ -1,0 +1,869 @@
+#include "lockstep/client/client.h"
+
+#include <unistd.h>
+
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <condition_variable>
+#include <cstdlib>
+#include <deque>
+#include <map>
+#include <mutex>
+#include <set>
+#include <thread>
+
+#include "lockstep/map/map.h"
+#include "lockstep/runtime/frame_buffer.h"
+#include "lockstep/runtime/hash.h"
+
+namespace lockstep::client {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+using RunFrame = std::pair<uint32_t, uint64_t>;
+
+Clock::time_point Deadline(double seconds) {
+  if (seconds < 0) return Clock::time_point::max();
+  return Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
+}
+
+std::string HostName() {
+  char buf[256] = {0};
+  gethostname(buf, sizeof(buf) - 1);
+  return buf;
+}
+
+std::string DefaultName() {
+  static std::atomic<int> counter{0};
+  return "client-" + HostName() + "-" + std::to_string(getpid()) + "-" + std::to_string(++counter);
+}
+
+msg::ActorKind KindOfBlueprint(const std::string& id, const BlueprintLibrary& library) {
+  if (auto d = library.Find(id)) return d->kind();
+  auto starts = [&](const char* p) { return id.rfind(p, 0) == 0; };
+  if (starts("vehicle.")) return msg::ActorKind::ACTOR_VEHICLE;
+  if (starts("walker.")) return msg::ActorKind::ACTOR_WALKER;
+  if (starts("drone.")) return msg::ActorKind::ACTOR_DRONE;
+  if (starts("sensor.")) return msg::ActorKind::ACTOR_SENSOR;
+  if (starts("traffic.traffic_light")) return msg::ActorKind::ACTOR_TRAFFIC_LIGHT;
+  if (starts("traffic.")) return msg::ActorKind::ACTOR_TRAFFIC_SIGN;
+  if (starts("controller.")) return msg::ActorKind::ACTOR_CONTROLLER;
+  if (starts("static.")) return msg::ActorKind::ACTOR_PROP;
+  return msg::ActorKind::ACTOR_OTHER;
+}
+
+bool Terminal(msg::DroneCommandStatus s) {
+  return s == msg::DroneCommandStatus::DRONE_CMD_COMPLETED || s == msg::DroneCommandStatus::DRONE_CMD_TIMED_OUT ||
+         s == msg::DroneCommandStatus::DRONE_CMD_CANCELLED || s == msg::DroneCommandStatus::DRONE_CMD_REJECTED;
+}
+
+std::string Fmt(double v) {
+  char b[32];
+  std::snprintf(b, sizeof(b), "%g", v);
+  return b;
+}
+
+}  // namespace
+
+int DefaultDomain() {
+  const char* env = std::getenv("LOCKSTEP_DOMAIN");
+  if (env == nullptr || *env == '\0') return 0;
+  char* end = nullptr;
+  const long d = std::strtol(env, &end, 10);
+  if (*end != '\0' || d < 0 || d > 232) {
+    throw ClientError(std::string("LOCKSTEP_DOMAIN='") + env + "' is not a DDS domain id (0..232)");
+  }
+  return static_cast<int>(d);
+}
+
+struct Client::Impl {
+  ClientOptions options;
+  std::unique_ptr<Bus> owned_bus;  // a DDS participant of our own, unless options.bus was given
+  Bus* bus = nullptr;
+
+  mutable std::mutex mu;
+  mutable std::condition_variable cv;
+
+  std::optional<msg::WorldInfo> world;
+  std::optional<msg::RunStatus> status;
+  std::optional<msg::MapData> map_data;
+  RunFrame done{0, 0};  // latest FrameDone
+  double done_sim_time = 0;
+  std::map<uint64_t, msg::CommandReply> replies;
+  std::map<std::string, std::vector<msg::BlueprintDeclaration>> declarations;
+  std::map<uint32_t, ActorInfo> actors;  // current run
+  uint32_t actors_run = 0;
+  std::map<uint64_t, msg::SpawnActor> pending_spawns;  // our spawn requests by sequence number
+  std::map<RunFrame, std::shared_ptr<const msg::GroundState>> ground;
+  std::map<RunFrame, std::shared_ptr<const msg::AirState>> air;
+  std::map<std::pair<uint32_t, uint64_t>, msg::DroneCommandStatus> drone_finished;  // (actor, command id)
+  std::map<uint32_t, std::pair<uint64_t, msg::DroneCommandStatus>> drone_last;     // actor -> (id, status)
+  uint64_t next_seq = 1;
+  uint64_t next_drone_command = 1;
+  uint64_t drone_id_base = 0;
+
+  std::shared_ptr<const map::Map> map_cache;
+  uint64_t map_cache_hash = 0;
+  std::mutex map_mu;
+
+  // Sensors.
+  struct Listener {
+    SensorType type;
+    SensorCallback callback;
+    RunFrame start{0, 0};      // frames after this one are expected
+    RunFrame delivered{0, 0};  // last frame delivered
+    uint64_t count = 0;
+    bool per_frame = true;     // checked by tick()
+  };
+  std::map<uint32_t, Listener> listeners;
+  std::deque<SensorSample> inbox;   // arrival order: per sensor in frame order (one writer each)
+  bool dispatching = false;         // a callback is running
+  bool stopping = false;
+  std::thread dispatcher;
+  std::mutex reader_mu;             // creation of the sensor readers
+  std::map<SensorType, std::shared_ptr<void>> sensor_readers;
+
+  Writer<msg::Command> commands;
+  // Readers last: their callbacks use everything above.
+  Reader<msg::WorldInfo> world_reader;
+  Reader<msg::RunStatus> status_reader;
+  Reader<msg::FrameDone> done_reader;
+  Reader<msg::CommandReply> reply_reader;
+  Reader<msg::BlueprintSet> blueprint_reader;
+  Reader<msg::MapData> map_reader;
+  Reader<msg::Tick> tick_reader;
+  Reader<msg::GroundState> ground_reader;
+  Reader<msg::AirState> air_reader;
+
+  explicit Impl(ClientOptions o) : options(std::move(o)) {
+    if (options.domain < 0) options.domain = DefaultDomain();
+    if (options.name.empty()) options.name = DefaultName();
+    drone_id_base = (Fnv1a64().Add(std::string_view(options.name)).value() & 0xffffffULL) << 32;
+    DdsOptions dds;
+    dds.domain_id = options.domain;
+    dds.participant_name = options.name;
+    if (options.bus != nullptr) {
+      bus = options.bus;
+    } else {
+      owned_bus = CreateDdsBus(dds);
+      bus = owned_bus.get();
+    }
+    dispatcher = std::thread([this] { Dispatch(); });
+    commands = Writer<msg::Command>(*bus, topics::kCommand);
+    world_reader = Reader<msg::WorldInfo>(*bus, topics::kWorldInfo, [this](const msg::WorldInfo& w, const SampleInfo&) {
+      Update([&] { world = w; });
+    });
+    status_reader = Reader<msg::RunStatus>(*bus, topics::kRunStatus, [this](const msg::RunStatus& s, const SampleInfo&) {
+      Update([&] { status = s; });
+    });
+    done_reader = Reader<msg::FrameDone>(*bus, topics::kFrameDone, [this](const msg::FrameDone& d, const SampleInfo&) {
+      Update([&] {
+        if (RunFrame{d.run(), d.frame()} > done) {
+          done = {d.run(), d.frame()};
+          done_sim_time = d.sim_time();
+        }
+      });
+    });
+    reply_reader = Reader<msg::CommandReply>(*bus, topics::kCommandReply, [this](const msg::CommandReply& r, const SampleInfo&) {
+      if (r.client().to_string() != options.name) return;
+      Update([&] { OnReply(r); });
+    });
+    blueprint_reader = Reader<msg::BlueprintSet>(*bus, topics::kBlueprints, [this](const msg::BlueprintSet& s, const SampleInfo&) {
+      Update([&] { declarations[s.service().to_string()] = s.blueprints(); });
+    });
+    map_reader = Reader<msg::MapData>(*bus, topics::kMap, [this](const msg::MapData& m, const SampleInfo&) {
+      Update([&] { map_data = m; });
+    });
+    tick_reader = Reader<msg::Tick>(*bus, topics::kTick, [this](const msg::Tick& t, const SampleInfo&) {
+      Update([&] { OnTick(t); });
+    });
+    ground_reader = Reader<msg::GroundState>(*bus, topics::kGroundState, [this](const msg::GroundState& g, const SampleInfo&) {
+      auto p = std::make_shared<const msg::GroundState>(g);
+      Update([&] { OnGround(std::move(p)); });
+    });
+    air_reader = Reader<msg::AirState>(*bus, topics::kAirState, [this](const msg::AirState& a, const SampleInfo&) {
+      auto p = std::make_shared<const msg::AirState>(a);
+      Update([&] { OnAir(std::move(p)); });
+    });
+    try {
+      Connect();
+    } catch (...) {
+      Shutdown();
+      throw;
+    }
+  }
+
+  ~Impl() { Shutdown(); }
+
+  void Shutdown() {
+    // Readers first, so no callback runs while the rest goes away.
+    air_reader = {};
+    ground_reader = {};
+    tick_reader = {};
+    map_reader = {};
+    blueprint_reader = {};
+    reply_reader = {};
+    done_reader = {};
+    status_reader = {};
+    world_reader = {};
+    {
+      std::lock_guard<std::mutex> lock(reader_mu);
+      sensor_readers.clear();
+    }
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      stopping = true;
+    }
+    cv.notify_all();
+    if (dispatcher.joinable()) dispatcher.join();
+    if (commands && commands.MatchedReaders() > 0) commands.WaitForAcknowledgments(0.5);
+  }
+
+  template <class F>
+  void Update(F&& f) {
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      f();
+    }
+    cv.notify_all();
+  }
+
+  // Waits (mu held by `lock`) until pred or the deadline; false on timeout.
+  template <class P>
+  bool WaitUntil(std::unique_lock<std::mutex>& lock, Clock::time_point deadline, P pred) {
+    while (!pred()) {
+      if (deadline == Clock::time_point::max()) {
+        cv.wait(lock);
+      } else if (cv.wait_until(lock, deadline) == std::cv_status::timeout) {
+        return pred();
+      }
+    }
+    return true;
+  }
+
+  void Connect() {
+    std::unique_lock<std::mutex> lock(mu);
+    const auto deadline = Deadline(options.timeout_s);
+    if (!WaitUntil(lock, deadline, [&] { return world.has_value(); })) {
+      throw ClientError("no Lockstep simulation on DDS domain " + std::to_string(options.domain) + ": no world info within " +
+                        Fmt(options.timeout_s) + " s (is `lockstep up` running on this domain? set LOCKSTEP_DOMAIN)");
+    }
+    // Commands are VOLATILE: wait until the coordinator reads ours and we read its replies.
+    lock.unlock();
+    while (commands.MatchedReaders() == 0 || reply_reader.MatchedWriters() == 0) {
+      if (Clock::now() > deadline) {
+        throw ClientError("the coordinator on DDS domain " + std::to_string(options.domain) +
+                          " does not read commands (no matched command reader within " + Fmt(options.timeout_s) + " s)");
+      }
+      lock.lock();
+      cv.wait_for(lock, std::chrono::milliseconds(5));
+      lock.unlock();
+    }
+  }
+
+  // --- callbacks (mu held) ---
+  void OnReply(const msg::CommandReply& r) {
+    replies[r.sequence_number()] = r;
+    auto it = pending_spawns.find(r.sequence_number());
+    if (it == pending_spawns.end()) return;
+    if (r.accepted() && r.actor() != 0) AddActor(r.run(), r.frame(), it->second, r.actor());
+    pending_spawns.erase(it);
+  }
+
+  void AddActor(uint32_t run, uint64_t frame, const msg::SpawnActor& s, uint32_t id) {
+    if (run != actors_run) {
+      if (run < actors_run) return;
+      actors.clear();
+      actors_run = run;
+    }
+    ActorInfo& a = actors[id];
+    a.id = id;
+    a.blueprint = s.blueprint().to_string();
+    a.kind = KindOfBlueprint(a.blueprint, BlueprintLibrary(declarations));
+    a.parent = s.parent();
+    if (!s.owner().to_string().empty()) a.owner = s.owner().to_string();
+    a.attributes.clear();
+    for (const auto& at : s.attributes()) a.attributes.emplace_back(at.key().to_string(), at.value().to_string());
+    a.spawn_pose = s.transform();
+    a.spawn_frame = frame;
+  }
+
+  void RemoveActor(uint32_t id) {
+    actors.erase(id);
+    for (auto it = actors.begin(); it != actors.end();) {
+      if (it->second.parent == id) {
+        const uint32_t child = it->first;
+        RemoveActor(child);
+        it = actors.upper_bound(child);
+      } else {
+        ++it;
+      }
+    }
+  }
+
+  void OnTick(const msg::Tick& t) {
+    for (const auto& c : t.commands()) {
+      const auto& b = c.body();
+      if (b._d() == msg::CommandKind::CMD_SPAWN_ACTOR) {
+        AddActor(t.run(), t.frame(), b.spawn_actor(), b.spawn_actor().actor());
+      } else if (b._d() == msg::CommandKind::CMD_DESTROY_ACTOR && t.run() == actors_run) {
+        RemoveActor(b.destroy_actor().actor());
+      }
+    }
+  }
+
+  template <class State>
+  static void Keep(std::map<RunFrame, std::shared_ptr<const State>>& m, std::shared_ptr<const State> s) {
+    m[RunFrame{s->stamp().run(), s->stamp().frame()}] = std::move(s);
+    while (m.size() > 8) m.erase(m.begin());
+  }
+
+  void OnGround(std::shared_ptr<const msg::GroundState> g) {
+    const uint32_t run = g->stamp().run();
+    if (run > actors_run) {
+      actors.clear();
+      actors_run = run;
+    }
+    if (run == actors_run) {
+      auto known = [&](uint32_t id, const std::string& bp, msg::ActorKind kind) {
+        if (actors.count(id)) return;
+        ActorInfo& a = actors[id];
+        a.id = id;
+        a.blueprint = bp;
+        a.kind = kind;
+      };
+      for (const auto& v : g->vehicles()) known(v.actor(), v.blueprint().to_string(), msg::ActorKind::ACTOR_VEHICLE);
+      for (const auto& w : g->walkers()) known(w.actor(), w.blueprint().to_string(), msg::ActorKind::ACTOR_WALKER);
+      for (const auto& l : g->traffic_lights()) known(l.actor(), "traffic.traffic_light", msg::ActorKind::ACTOR_TRAFFIC_LIGHT);
+    }
+    Keep(ground, std::move(g));
+  }
+
+  void OnAir(std::shared_ptr<const msg::AirState> a) {
+    const uint32_t run = a->stamp().run();
+    if (run > actors_run) {
+      actors.clear();
+      actors_run = run;
+    }
+    for (const auto& d : a->drones()) {
+      if (run == actors_run && !actors.count(d.actor())) {
+        ActorInfo& info = actors[d.actor()];
+        info.id = d.actor();
+        info.blueprint = d.blueprint().to_string();
+        info.kind = msg::ActorKind::ACTOR_DRONE;
+      }
+      // Command completion: the latest status of each command, and a command replaced
+      // by a newer one before it finished counts as cancelled.
+      auto& last = drone_last[d.actor()];
+      if (last.first != 0 && last.first != d.command_id() && !Terminal(last.second)) {
+        drone_finished[{d.actor(), last.first}] = msg::DroneCommandStatus::DRONE_CMD_CANCELLED;
+      }
+      last = {d.command_id(), d.command_status()};
+      if (d.command_id() != 0 && Terminal(d.command_status())) drone_finished[{d.actor(), d.command_id()}] = d.command_status();
+    }
+    while (drone_finished.size() > 4096) drone_finished.erase(drone_finished.begin());
+    Keep(air, std::move(a));
+  }
+
+  // --- commands ---
+  uint64_t Send(msg::CommandBody body) {
+    msg::Command c;
+    c.client(options.name);
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      c.sequence_number(next_seq++);
+      if (body._d() == msg::CommandKind::CMD_SPAWN_ACTOR) pending_spawns[c.sequence_number()] = body.spawn_actor();
+    }
+    c.body(std::move(body));
+    commands.Write(c);
+    return c.sequence_number();
+  }
+
+  msg::CommandReply WaitReply(uint64_t seq, const char* what) {
+    std::unique_lock<std::mutex> lock(mu);
+    if (!WaitUntil(lock, Deadline(options.timeout_s), [&] { return replies.count(seq) > 0; })) {
+      throw ClientError(std::string(what) + ": no reply from the coordinator within " + Fmt(options.timeout_s) + " s");
+    }
+    msg::CommandReply r = replies.at(seq);
+    replies.erase(seq);
+    return r;
+  }
+
+  // --- sensors ---
+  void Dispatch() {
+    std::unique_lock<std::mutex> lock(mu);
+    while (true) {
+      cv.wait(lock, [&] { return stopping || !inbox.empty(); });
+      if (stopping) return;
+      SensorSample s = std::move(inbox.front());
+      inbox.pop_front();
+      auto it = listeners.find(s.sensor);
+      const RunFrame rf{s.stamp.run(), s.stamp.frame()};
+      if (it == listeners.end() || rf <= it->second.delivered) continue;  // stopped, or a duplicate
+      SensorCallback cb = it->second.callback;
+      dispatching = true;
+      lock.unlock();
+      try {
+        cb(s);
+      } catch (...) {
+        // A callback's exception must not kill the dispatcher; the Python layer reports its own.
+      }
+      lock.lock();
+      dispatching = false;
+      it = listeners.find(s.sensor);
+      if (it != listeners.end()) {
+        it->second.delivered = std::max(it->second.delivered, rf);
+        ++it->second.count;
+      }
+      cv.notify_all();
+    }
+  }
+
+  void OnSensor(SensorType type, uint32_t sensor, const msg::FrameStamp& stamp, std::shared_ptr<const void> message) {
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      if (!listeners.count(sensor)) return;
+      SensorSample s;
+      s.type = type;
+      s.sensor = sensor;
+      s.stamp = stamp;
+      s.message = std::move(message);
+      inbox.push_back(std::move(s));
+    }
+    cv.notify_all();
+  }
+
+  template <class T>
+  void MakeSensorReader(SensorType type, const Topic<T>& topic) {
+    auto reader = std::make_shared<Reader<T>>(*bus, topic, [this, type](const T& m, const SampleInfo&) {
+      OnSensor(type, m.sensor(), m.stamp(), std::make_shared<const T>(m));
+    });
+    sensor_readers[type] = reader;
+  }
+
+  void EnsureSensorReader(SensorType type) {
+    std::lock_guard<std::mutex> lock(reader_mu);
+    if (sensor_readers.count(type)) return;
+    switch (type) {
+      case SensorType::kImage: MakeSensorReader(type, topics::kImage); break;
+      case SensorType::kPointCloud: MakeSensorReader(type, topics::kPointCloud); break;
+      case SensorType::kRadar: MakeSensorReader(type, topics::kRadar); break;
+      case SensorType::kImu: MakeSensorReader(type, topics::kImu); break;
+      case SensorType::kGnss: MakeSensorReader(type, topics::kGnss); break;
+      case SensorType::kBarometer: MakeSensorReader(type, topics::kBarometer); break;
+      case SensorType::kMagnetometer: MakeSensorReader(type, topics::kMagnetometer); break;
+      case SensorType::kCollision: MakeSensorReader(type, topics::kCollision); break;
+      case SensorType::kLaneInvasion: MakeSensorReader(type, topics::kLaneInvasion); break;
+      case SensorType::kObstacle: MakeSensorReader(type, topics::kObstacle); break;
+    }
+  }
+
+  // After frame k of `run` completed: the ground / air state of k (from the services
+  // that publish one), then every listened per-frame sensor's data of its frame.
+  void AwaitFrameOutputs(uint32_t run, uint64_t k) {
+    std::unique_lock<std::mutex> lock(mu);
+    // A state topic counts when its writer is matched, or (right after connecting, before
+    // discovery finished) when a member of the run is the service kind that publishes it.
+    const bool has_ground = ground_reader.MatchedWriters() > 0 || MemberOfKind("ground_sim");
+    const bool has_air = air_reader.MatchedWriters() > 0 || MemberOfKind("air_sim");
+    const auto state_deadline = Deadline(options.state_timeout_s);
+    WaitUntil(lock, state_deadline, [&] {
+      return (!has_ground || ground.count({run, k})) && (!has_air || air.count({run, k}));
+    });
+    const msg::PerceptionMode mode = world ? world->settings().perception_mode() : msg::PerceptionMode::PERCEPTION_STRICT;
+    const uint64_t pk = PerceptionFrame(mode, k);
+    auto late = [&] {
+      std::vector<uint32_t> out;
+      for (const auto& [id, l] : listeners) {
+        if (!l.per_frame || pk == 0) continue;
+        const RunFrame want{run, pk};
+        if (want <= l.start) continue;  // spawned or listened after that frame
+        if (l.delivered < want) out.push_back(id);
+      }
+      return out;
+    };
+    if (!WaitUntil(lock, Deadline(options.sensor_timeout_s), [&] { return late().empty(); })) {
+      std::vector<uint32_t> ids = late();
+      std::string list;
+      for (uint32_t id : ids) {
+        auto a = actors.find(id);
+        list += (list.empty() ? "" : ", ") + std::to_string(id) + (a != actors.end() ? " (" + a->second.blueprint + ")" : "");
+      }
+      throw SensorLate("tick(): frame " + std::to_string(k) + " is complete but sensor(s) " + list + " delivered no data for frame " +
+                           std::to_string(pk) + " within " + Fmt(options.sensor_timeout_s) +
+                           " s (is the service that owns them running?)",
+                       ids, pk);
+    }
+  }
+
+  bool MemberOfKind(const std::string& kind) const {
+    if (!status) return false;
+    for (const auto& m : status->members()) {
+      if (m.alive() && m.kind().to_string() == kind) return true;
+    }
+    return false;
+  }
+
+  std::string FaultReason() const {
+    if (status && (status->state() == msg::RunState::RUN_FAULTED || status->state() == msg::RunState::RUN_STOPPED)) {
+      return std::string(" (run ") + RunStateName(status->state()) +
+             (status->reason().to_string().empty() ? "" : ": " + status->reason().to_string()) + ")";
+    }
+    return "";
+  }
+};
+
+// ---------------------------------------------------------------------------
+
+Client::Client(ClientOptions options) : impl_(std::make_unique<Impl>(std::move(options))) {}
+Client::~Client() = default;
+
+int Client::domain() const { return impl_->options.domain; }
+const std::string& Client::name() const { return impl_->options.name; }
+const ClientOptions& Client::options() const { return impl_->options; }
+
+msg::WorldInfo Client::world_info() const {
+  std::lock_guard<std::mutex> lock(impl_->mu);
+  return *impl_->world;
+}
+
+bool Client::wait_ready(double timeout_s) {
+  std::unique_lock<std::mutex> lock(impl_->mu);
+  return impl_->WaitUntil(lock, Deadline(timeout_s), [&] {
+    const auto& s = impl_->status;
+    return s && s->run() == impl_->world->run() &&
+           (s->state() == msg::RunState::RUN_READY || s->state() == msg::RunState::RUN_RUNNING);
+  });
+}
+
+std::optional<msg::RunStatus> Client::run_status() const {
+  std::lock_guard<std::mutex> lock(impl_->mu);
+  return impl_->status;
+}
+
+uint32_t Client::run() const {
+  std::lock_guard<std::mutex> lock(impl_->mu);
+  return impl_->world->run();
+}
+
+uint64_t Client::frame() const {
+  std::lock_guard<std::mutex> lock(impl_->mu);
+  return impl_->done.first == impl_->world->run() ? impl_->done.second : 0;
+}
+
+msg::WorldSettings Client::settings() const { return world_info().settings(); }
+
+uint64_t Client::apply_settings(const msg::WorldSettings& settings) {
+  msg::CommandBody b;
+  b.world_settings(settings);
+  const msg::CommandReply r = Submit(std::move(b));
+  // The coordinator publishes the new WorldInfo before its reply; wait until we have it.
+  std::unique_lock<std::mutex> lock(impl_->mu);
+  impl_->WaitUntil(lock, Deadline(impl_->options.timeout_s), [&] {
+    const auto& s = impl_->world->settings();
+    return s.synchronous_mode() == settings.synchronous_mode() && s.fixed_delta_seconds() == settings.fixed_delta_seconds() &&
+           s.perception_mode() == settings.perception_mode();
+  });
+  return r.frame();
+}
+
+void Client::set_weather(const msg::WeatherParameters& weather) {
+  msg::CommandBody b;
+  b.weather(weather);
+  Submit(std::move(b));
+}
+
+uint64_t Client::tick() {
+  auto& s = *impl_;
+  msg::CommandBody b;
+  msg::TickRequest t;
+  t.count(1);
+  b.tick_request(t);
+  const msg::CommandReply r = Submit(std::move(b));
+  const RunFrame want{r.run(), r.frame()};
+  {
+    std::unique_lock<std::mutex> lock(s.mu);
+    if (!s.WaitUntil(lock, Deadline(s.options.tick_timeout_s), [&] { return s.done >= want; })) {
+      throw ClientError("tick(): frame " + std::to_string(r.frame()) + " did not complete within " + Fmt(s.options.tick_timeout_s) +
+                        " s" + s.FaultReason());
+    }
+  }
+  s.AwaitFrameOutputs(r.run(), r.frame());
+  return r.frame();
+}
+
+uint64_t Client::wait_for_tick(double timeout_s) {
+  auto& s = *impl_;
+  std::unique_lock<std::mutex> lock(s.mu);
+  const RunFrame from = s.done;
+  if (!s.WaitUntil(lock, Deadline(timeout_s < 0 ? s.options.tick_timeout_s : timeout_s), [&] { return s.done > from; })) {
+    throw ClientError("wait_for_tick(): no new frame after " + std::to_string(from.second) + " within " +
+                      Fmt(timeout_s < 0 ? s.options.tick_timeout_s : timeout_s) + " s" + s.FaultReason());
+  }
+  return s.done.second;
+}
+
+uint32_t Client::reset(uint64_t seed) {
+  msg::CommandBody b;
+  msg::ResetWorld r;
+  r.seed(seed);
+  b.reset(r);
+  const uint32_t run = Submit(std::move(b)).run();
+  std::unique_lock<std::mutex> lock(impl_->mu);
+  impl_->WaitUntil(lock, Deadline(impl_->options.timeout_s), [&] { return impl_->world->run() >= run; });
+  return run;
+}
+
+uint32_t Client::load_map(const std::string& name, const std::string& opendrive, const std::string& scene) {
+  msg::CommandBody b;
+  msg::LoadMap m;
+  m.name(name);
+  m.opendrive(opendrive);
+  m.scene(scene);
+  b.load_map(m);
+  const uint32_t run = Submit(std::move(b)).run();
+  std::unique_lock<std::mutex> lock(impl_->mu);
+  impl_->WaitUntil(lock, Deadline(impl_->options.timeout_s), [&] {
+    return impl_->world->run() >= run && impl_->map_data && impl_->map_data->run() >= run;
+  });
+  return run;
+}
+
+uint64_t Client::Send(msg::CommandBody body) { return impl_->Send(std::move(body)); }
+
+msg::CommandReply Client::WaitReply(uint64_t sequence) { return impl_->WaitReply(sequence, "command"); }
+
+msg::CommandReply Client::Submit(msg::CommandBody body, bool throw_if_rejected) {
+  const msg::CommandKind kind = body._d();
+  const uint64_t seq = impl_->Send(std::move(body));
+  msg::CommandReply r = impl_->WaitReply(seq, CommandKindName(kind));
+  if (!r.accepted() && throw_if_rejected) {
+    throw CommandRejected(std::string(CommandKindName(kind)) + " rejected: " + r.reason().to_string(), r.reason().to_string());
+  }
+  return r;
+}
+
+std::vector<msg::CommandReply> Client::SubmitBatch(const std::vector<msg::CommandBody>& bodies) {
+  // The command topic keeps 256 samples: send in windows so none is overwritten unread.
+  constexpr size_t kWindow = 128;
+  std::vector<msg::CommandReply> out;
+  out.reserve(bodies.size());
+  for (size_t begin = 0; begin < bodies.size(); begin += kWindow) {
+    std::vector<uint64_t> seqs;
+    for (size_t i = begin; i < std::min(bodies.size(), begin + kWindow); ++i) seqs.push_back(impl_->Send(bodies[i]));
+    for (uint64_t seq : seqs) out.push_back(impl_->WaitReply(seq, "batch command"));
+  }
+  return out;
+}
+
+uint32_t Client::spawn(const std::string& blueprint, const msg::Pose& pose, const AttributeList& attributes, uint32_t parent) {
+  const msg::CommandReply r = impl_->WaitReply(impl_->Send(SpawnBody(blueprint, pose, attributes, parent)), "spawn");
+  if (!r.accepted()) {
+    throw CommandRejected("spawn of '" + blueprint + "' rejected: " + r.reason().to_string(), r.reason().to_string());
+  }
+  return r.actor();
+}
+
+std::optional<uint32_t> Client::try_spawn(const std::string& blueprint, const msg::Pose& pose, const AttributeList& attributes,
+                                          uint32_t parent, std::string* reason) {
+  const msg::CommandReply r = impl_->WaitReply(impl_->Send(SpawnBody(blueprint, pose, attributes, parent)), "spawn");
+  if (!r.accepted()) {
+    if (reason) *reason = r.reason().to_string();
+    return std::nullopt;
+  }
+  return r.actor();
+}
+
+void Client::destroy(uint32_t actor) {
+  msg::CommandBody b;
+  msg::DestroyActor d;
+  d.actor(actor);
+  b.destroy_actor(d);
+  Submit(std::move(b));
+  std::lock_guard<std::mutex> lock(impl_->mu);
+  impl_->RemoveActor(actor);
+  impl_->listeners.erase(actor);
+}
+
+BlueprintLibrary Client::blueprints(double wait_s) const {
+  std::unique_lock<std::mutex> lock(impl_->mu);
+  impl_->WaitUntil(lock, Deadline(wait_s), [&] { return !impl_->declarations.empty(); });
+  return BlueprintLibrary(impl_->declarations);
+}
+
+std::vector<ActorInfo> Client::actors() const {
+  std::lock_guard<std::mutex> lock(impl_->mu);
+  std::vector<ActorInfo> out;
+  if (impl_->actors_run != impl_->world->run()) return out;
+  for (const auto& [id, a] : impl_->actors) out.push_back(a);
+  return out;
+}
+
+std::optional<ActorInfo> Client::actor(uint32_t id) const {
+  std::lock_guard<std::mutex> lock(impl_->mu);
+  if (impl_->actors_run != impl_->world->run()) return std::nullopt;
+  auto it = impl_->actors.find(id);
+  if (it == impl_->actors.end()) return std::nullopt;
+  return it->second;
+}
+
+Snapshot Client::snapshot() const {
+  std::lock_guard<std::mutex> lock(impl_->mu);
+  Snapshot s;
+  s.run = impl_->world->run();
+  s.frame = impl_->done.first == s.run ? impl_->done.second : 0;
+  s.sim_time = impl_->done_sim_time;
+  // The state of the latest completed frame, else the newest of this run.
+  auto pick = [&](const auto& m) -> decltype(m.begin()->second) {
+    auto it = m.find({s.run, s.frame});
+    if (it != m.end()) return it->second;
+    for (auto r = m.rbegin(); r != m.rend(); ++r) {
+      if (r->first.first == s.run) return r->second;
+    }
+    return nullptr;
+  };
+  if (auto g = pick(impl_->ground)) s.ground = *g;
+  if (auto a = pick(impl_->air)) s.air = *a;
+  return s;
+}
+
+std::shared_ptr<const map::Map> Client::map() {
+  std::optional<msg::MapData> data;
+  {
+    std::unique_lock<std::mutex> lock(impl_->mu);
+    impl_->WaitUntil(lock, Deadline(impl_->options.timeout_s), [&] { return impl_->map_data.has_value(); });
+    data = impl_->map_data;
+  }
+  if (!data || data->opendrive().empty()) throw ClientError("get_map(): the simulation has no map loaded");
+  std::lock_guard<std::mutex> lock(impl_->map_mu);
+  if (!impl_->map_cache || impl_->map_cache_hash != data->content_hash()) {
+    impl_->map_cache = std::make_shared<const map::Map>(map::Map::FromString(data->opendrive(), data->name().to_string()));
+    impl_->map_cache_hash = data->content_hash();
+  }
+  return impl_->map_cache;
+}
+
+void Client::listen(uint32_t sensor, SensorCallback callback) {
+  auto info = actor(sensor);
+  if (!info) throw ClientError("listen(): no actor " + std::to_string(sensor) + " in the current run");
+  SensorType type;
+  if (!SensorTypeOf(info->blueprint, &type)) {
+    throw ClientError("listen(): actor " + std::to_string(sensor) + " (" + info->blueprint + ") is not a sensor");
+  }
+  impl_->EnsureSensorReader(type);
+  std::lock_guard<std::mutex> lock(impl_->mu);
+  Impl::Listener l;
+  l.type = type;
+  l.callback = std::move(callback);
+  const uint32_t run = impl_->world->run();
+  const uint64_t now = impl_->done.first == run ? impl_->done.second : 0;
+  l.start = {run, std::max(now, info->spawn_frame)};
+  l.delivered = {run, 0};
+  const double sensor_tick = std::atof(info->Attribute("sensor_tick", "0").c_str());
+  l.per_frame = IsPerFrame(type) && !(sensor_tick > impl_->world->settings().fixed_delta_seconds() + 1e-9);
+  impl_->listeners[sensor] = std::move(l);
+}
+
+void Client::stop(uint32_t sensor) {
+  std::unique_lock<std::mutex> lock(impl_->mu);
+  impl_->listeners.erase(sensor);
+}
+
+bool Client::is_listening(uint32_t sensor) const {
+  std::lock_guard<std::mutex> lock(impl_->mu);
+  return impl_->listeners.count(sensor) > 0;
+}
+
+uint64_t Client::delivered(uint32_t sensor) const {
+  std::lock_guard<std::mutex> lock(impl_->mu);
+  auto it = impl_->listeners.find(sensor);
+  return it == impl_->listeners.end() ? 0 : it->second.count;
+}
+
+std::optional<msg::DroneState> Client::drone_state(uint32_t actor) const {
+  std::lock_guard<std::mutex> lock(impl_->mu);
+  for (auto it = impl_->air.rbegin(); it != impl_->air.rend(); ++it) {
+    for (const auto& d : it->second->drones()) {
+      if (d.actor() == actor) return d;
+    }
+    break;  // only the newest state counts: an actor missing there is gone
+  }
+  return std::nullopt;
+}
+
+uint64_t Client::send_drone(msg::DroneCommand command) {
+  {
+    std::lock_guard<std::mutex> lock(impl_->mu);
+    command.command_id(impl_->drone_id_base | impl_->next_drone_command++);
+  }
+  msg::CommandBody b;
+  b.drone(command);
+  Submit(std::move(b));
+  return command.command_id();
+}
+
+msg::DroneCommandStatus Client::wait_drone(uint32_t actor, uint64_t command_id, double timeout_s) {
+  auto& s = *impl_;
+  const auto deadline = Deadline(timeout_s);
+  while (true) {
+    {
+      std::unique_lock<std::mutex> lock(s.mu);
+      auto done = s.drone_finished.find({actor, command_id});
+      if (done != s.drone_finished.end()) return done->second;
+      if (Clock::now() >= deadline) {
+        throw ClientError("drone " + std::to_string(actor) + ": command " + std::to_string(command_id & 0xffffffffULL) +
+                          " not finished within " + Fmt(timeout_s) + " s");
+      }
+      if (!s.world->settings().synchronous_mode()) {
+        const size_t seen = s.air.empty() ? 0 : s.air.rbegin()->first.second;
+        s.cv.wait_until(lock, std::min(deadline, Clock::now() + std::chrono::milliseconds(200)), [&] {
+          return s.drone_finished.count({actor, command_id}) || (!s.air.empty() && s.air.rbegin()->first.second != seen);
+        });
+        if (!s.drone_finished.count({actor, command_id}) && (s.actors_run != s.world->run() || !s.actors.count(actor))) {
+          throw ClientError("drone " + std::to_string(actor) + " is gone (destroyed, or a new run began)");
+        }
+        continue;
+      }
+    }
+    tick();  // synchronous mode: this client drives the clock while it waits
+    std::lock_guard<std::mutex> lock(s.mu);
+    if (!s.drone_finished.count({actor, command_id}) && (s.actors_run != s.world->run() || !s.actors.count(actor))) {
+      throw ClientError("drone " + std::to_string(actor) + " is gone (destroyed, or a new run began)");
+    }
+  }
+}
+
+const char* CommandKindName(msg::CommandKind kind) {
+  switch (kind) {
+    case msg::CommandKind::CMD_SPAWN_ACTOR: return "spawn_actor";
+    case msg::CommandKind::CMD_DESTROY_ACTOR: return "destroy_actor";
+    case msg::CommandKind::CMD_SET_TRANSFORM: return "set_transform";
+    case msg::CommandKind::CMD_VEHICLE_CONTROL: return "apply_control (vehicle)";
+    case msg::CommandKind::CMD_WALKER_CONTROL: return "apply_control (walker)";
+    case msg::CommandKind::CMD_DRONE: return "drone command";
+    case msg::CommandKind::CMD_TRAFFIC_LIGHT: return "traffic light command";
+    case msg::CommandKind::CMD_TRAFFIC_MANAGER: return "traffic manager command";
+    case msg::CommandKind::CMD_SET_WEATHER: return "set_weather";
+    case msg::CommandKind::CMD_SET_WORLD_SETTINGS: return "apply_settings";
+    case msg::CommandKind::CMD_LOAD_MAP: return "load_world";
+    case msg::CommandKind::CMD_RESET: return "reload_world";
+    case msg::CommandKind::CMD_TICK: return "tick";
+  }
+  return "command";
+}
+
+const char* DroneStatusName(msg::DroneCommandStatus status) {
+  switch (status) {
+    case msg::DroneCommandStatus::DRONE_CMD_NONE: return "none";
+    case msg::DroneCommandStatus::DRONE_CMD_RUNNING: return "running";
+    case msg::DroneCommandStatus::DRONE_CMD_COMPLETED: return "completed";
+    case msg::DroneCommandStatus::DRONE_CMD_TIMED_OUT: return "timed_out";
+    case msg::DroneCommandStatus::DRONE_CMD_CANCELLED: return "cancelled";
+    case msg::DroneCommandStatus::DRONE_CMD_REJECTED: return "rejected";
+  }
+  return "?";
+}
+
+}  // namespace lockstep::client

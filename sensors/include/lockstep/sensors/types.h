@@ -1,0 +1,108 @@
+#pragma once
+// Plain types of the sensors core: poses, the actors a frame shows, a seeded random
+// stream. World frame ENU (x east, y north, z up), metres; bodies and sensors FLU
+// (x forward, y left, z up). No DDS here.
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+namespace lockstep::sensors {
+
+using Vec3 = Eigen::Vector3d;
+using Quat = Eigen::Quaterniond;
+
+struct Pose {
+  Vec3 position = Vec3::Zero();
+  Quat orientation = Quat::Identity();  // body to parent
+
+  Vec3 Apply(const Vec3& p) const { return position + orientation * p; }
+  // This pose followed by `child` (a pose given in this pose's frame).
+  Pose Compose(const Pose& child) const { return Pose{Apply(child.position), (orientation * child.orientation).normalized()}; }
+};
+
+Pose MakePose(double x, double y, double z, double yaw = 0, double pitch = 0, double roll = 0);
+
+enum class ActorKind { kVehicle, kWalker, kDrone, kOther };
+// What a ray hit: the kinds of ObjectKind on the wire.
+enum class HitKind { kNone, kGround, kStatic, kVehicle, kWalker, kDrone };
+
+// One moving actor as the physics services published it for a frame.
+struct Actor {
+  uint32_t id = 0;
+  ActorKind kind = ActorKind::kOther;
+  std::string blueprint;
+  Pose pose;                                   // world, centre of the bounding box
+  Vec3 half_extents = Vec3(0.5, 0.5, 0.5);     // m, box half sizes along body x, y, z
+  Vec3 velocity = Vec3::Zero();                // m/s, world
+  Vec3 angular_velocity = Vec3::Zero();        // rad/s, world
+};
+
+// CARLA semantic tag of an actor (Car, Truck, Bus, Motorcycle, Bicycle, Pedestrian; drones
+// have no CARLA class: Dynamic).
+uint8_t ActorTag(const Actor& a);
+HitKind ActorHitKind(ActorKind k);
+
+// The actors of one frame, sorted by id.
+struct WorldFrame {
+  uint32_t run = 0;
+  uint64_t frame = 0;      // the frame these states belong to
+  double sim_time = 0;     // s
+  std::vector<Actor> actors;
+  const Actor* Find(uint32_t id) const;
+};
+
+// Physics events of one frame (PhysicsEvents on the wire), for the event sensors.
+struct CollisionEvent {
+  uint32_t actor = 0;
+  uint32_t other_actor = 0;      // 0 = static geometry
+  HitKind other_kind = HitKind::kNone;
+  uint8_t other_tag = 0;
+  Vec3 normal_impulse = Vec3::Zero();  // N s, world
+  Vec3 location = Vec3::Zero();        // m, world
+};
+struct LaneMarking {
+  int type = 0;                  // msg::LaneMarkingType value
+  std::string color;
+  float width = 0;
+  bool lane_change_left = false;
+  bool lane_change_right = false;
+};
+struct LaneInvasionEvent {
+  uint32_t actor = 0;
+  std::vector<LaneMarking> crossed;
+};
+struct FrameEvents {
+  std::vector<CollisionEvent> collisions;
+  std::vector<LaneInvasionEvent> lane_invasions;
+};
+
+// Weather that attenuates LiDAR returns (CARLA's WeatherParameters ranges, 0..100).
+struct Weather {
+  double precipitation = 0;
+  double fog_density = 0;
+};
+
+// Deterministic random stream (splitmix64 seeding, xoshiro256**), identical on every
+// platform: std::normal_distribution is not specified bit for bit, this is.
+class Rng {
+ public:
+  explicit Rng(uint64_t seed = 0);
+  uint64_t Next();
+  double Uniform();                          // [0, 1)
+  double Uniform(double lo, double hi) { return lo + (hi - lo) * Uniform(); }
+  double Normal(double mean = 0, double stddev = 1);  // Box-Muller, both halves used
+  uint64_t Fingerprint() const;              // for state hashes
+
+ private:
+  uint64_t s_[4];
+  bool has_spare_ = false;
+  double spare_ = 0;
+};
+
+// FNV-1a 64 of a few integers: per-sensor seeds from the run seed.
+uint64_t MixSeed(uint64_t a, uint64_t b, uint64_t c = 0);
+
+}  // namespace lockstep::sensors

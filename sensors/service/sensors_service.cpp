@@ -1,0 +1,477 @@
+#include "sensors_service.h"
+
+#include <algorithm>
+#include <filesystem>
+
+#include "lockstep/map/map.h"
+#include "lockstep/map/scene.h"
+#include "lockstep/map/scene_mesh.h"
+#include "lockstep/runtime/blueprint_builder.h"
+#include "lockstep/runtime/error.h"
+#include "lockstep/runtime/log.h"
+
+namespace lockstep {
+
+namespace {
+
+namespace s = sensors;
+
+// A drone's box for ray hits: AirSim's generic quad spans about 0.55 m across its rotors.
+const s::Vec3 kDroneHalfExtents(0.3, 0.3, 0.1);
+
+s::Vec3 ToVec(const msg::Vector3& v) { return {v.x(), v.y(), v.z()}; }
+msg::Vector3 FromVec(const s::Vec3& v) {
+  msg::Vector3 m;
+  m.x(v.x());
+  m.y(v.y());
+  m.z(v.z());
+  return m;
+}
+s::Quat ToQuat(const msg::Quaternion& q) {
+  s::Quat out(q.w(), q.x(), q.y(), q.z());
+  if (out.norm() < 1e-9) return s::Quat::Identity();  // an unset pose means no rotation
+  return out.normalized();
+}
+msg::Quaternion FromQuat(const s::Quat& q) {
+  msg::Quaternion m;
+  m.w(q.w());
+  m.x(q.x());
+  m.y(q.y());
+  m.z(q.z());
+  return m;
+}
+s::Pose ToPose(const msg::Pose& p) { return s::Pose{ToVec(p.position()), ToQuat(p.orientation())}; }
+msg::Pose FromPose(const s::Pose& p) {
+  msg::Pose m;
+  m.position(FromVec(p.position));
+  m.orientation(FromQuat(p.orientation));
+  return m;
+}
+msg::ObjectKind ToWire(s::HitKind k) {
+  switch (k) {
+    case s::HitKind::kNone: return msg::ObjectKind::OBJECT_NONE;
+    case s::HitKind::kGround: return msg::ObjectKind::OBJECT_GROUND;
+    case s::HitKind::kStatic: return msg::ObjectKind::OBJECT_STATIC;
+    case s::HitKind::kVehicle: return msg::ObjectKind::OBJECT_VEHICLE;
+    case s::HitKind::kWalker: return msg::ObjectKind::OBJECT_WALKER;
+    case s::HitKind::kDrone: return msg::ObjectKind::OBJECT_DRONE;
+  }
+  return msg::ObjectKind::OBJECT_NONE;
+}
+s::HitKind FromWire(msg::ObjectKind k) {
+  switch (k) {
+    case msg::ObjectKind::OBJECT_NONE: return s::HitKind::kNone;
+    case msg::ObjectKind::OBJECT_GROUND: return s::HitKind::kGround;
+    case msg::ObjectKind::OBJECT_STATIC: return s::HitKind::kStatic;
+    case msg::ObjectKind::OBJECT_VEHICLE: return s::HitKind::kVehicle;
+    case msg::ObjectKind::OBJECT_WALKER: return s::HitKind::kWalker;
+    case msg::ObjectKind::OBJECT_DRONE: return s::HitKind::kDrone;
+  }
+  return s::HitKind::kNone;
+}
+msg::LaneMarking ToWire(const s::LaneMarking& m) {
+  msg::LaneMarking out;
+  out.type(static_cast<msg::LaneMarkingType>(m.type));
+  out.color(m.color);
+  out.width(m.width);
+  out.lane_change_left(m.lane_change_left);
+  out.lane_change_right(m.lane_change_right);
+  return out;
+}
+
+msg::AttributeDeclaration Declare(const s::AttributeSpec& a) {
+  switch (a.type) {
+    case s::AttrType::kBool: return blueprint::Bool(a.id, a.default_value == "true");
+    case s::AttrType::kInt: return blueprint::Int(a.id, std::stoll(a.default_value), a.min, a.max);
+    case s::AttrType::kFloat: {
+      msg::AttributeDeclaration d = blueprint::Float(a.id, std::stod(a.default_value), a.min, a.max);
+      d.default_value(a.default_value);  // the exact default, not a 6-digit rendering
+      return d;
+    }
+    case s::AttrType::kString: return blueprint::String(a.id, a.default_value);
+  }
+  return blueprint::String(a.id, a.default_value);
+}
+
+}  // namespace
+
+PhysicsEventsBuffer::PhysicsEventsBuffer(Bus& bus, size_t capacity)
+    : capacity_(capacity), reader_(bus, topics::kPhysicsEvents, [this](const msg::PhysicsEvents& e, const SampleInfo&) {
+        {
+          std::lock_guard<std::mutex> lock(mu_);
+          batches_[Key{e.stamp().run(), e.stamp().frame()}][e.service().to_string()] = e;
+          while (batches_.size() > capacity_) batches_.erase(batches_.begin());
+        }
+        cv_.notify_all();
+      }) {}
+
+std::optional<std::vector<msg::PhysicsEvents>> PhysicsEventsBuffer::WaitFor(uint32_t run, uint64_t frame, const std::set<std::string>& from,
+                                                                            std::chrono::milliseconds timeout) {
+  std::unique_lock<std::mutex> lock(mu_);
+  const Key key{run, frame};
+  auto complete = [&] {
+    auto it = batches_.find(key);
+    if (it == batches_.end()) return from.empty();
+    for (const auto& s : from) {
+      if (!it->second.count(s)) return false;
+    }
+    return true;
+  };
+  if (!cv_.wait_for(lock, timeout, complete)) return std::nullopt;
+  std::vector<msg::PhysicsEvents> out;
+  if (auto it = batches_.find(key); it != batches_.end()) {
+    for (const auto& s : from) out.push_back(it->second.at(s));  // in service-name order: deterministic
+  }
+  return out;
+}
+
+SensorsService::SensorsService(Bus& bus, std::string name, SensorsOptions options)
+    : name_(std::move(name)),
+      options_(std::move(options)),
+      point_cloud_writer_(bus, topics::kPointCloud),
+      radar_writer_(bus, topics::kRadar),
+      imu_writer_(bus, topics::kImu),
+      gnss_writer_(bus, topics::kGnss),
+      barometer_writer_(bus, topics::kBarometer),
+      magnetometer_writer_(bus, topics::kMagnetometer),
+      distance_writer_(bus, topics::kDistance),
+      obstacle_writer_(bus, topics::kObstacle),
+      collision_writer_(bus, topics::kCollision),
+      lane_invasion_writer_(bus, topics::kLaneInvasion),
+      event_writer_(bus, topics::kEvent),
+      declarations_(bus),
+      ground_(bus, topics::kGroundState, 16),
+      air_(bus, topics::kAirState, 16),
+      events_(bus),
+      map_reader_(bus, topics::kMap, [this](const msg::MapData& m, const SampleInfo&) {
+        {
+          std::lock_guard<std::mutex> lock(map_mu_);
+          map_ = m;
+        }
+        map_cv_.notify_all();
+      }) {}
+
+SensorsService::~SensorsService() = default;
+
+std::vector<msg::BlueprintDeclaration> SensorsService::Blueprints() const {
+  std::vector<msg::BlueprintDeclaration> out;
+  for (const auto& bp : s::SensorBlueprints()) {
+    std::vector<msg::AttributeDeclaration> attrs;
+    for (const auto& a : bp.attributes) attrs.push_back(Declare(a));
+    out.push_back(blueprint::Make(bp.id, msg::ActorKind::ACTOR_SENSOR, attrs));
+  }
+  return out;
+}
+
+bool SensorsService::Owns(const msg::SpawnActor& spawn) const {
+  const std::string owner = spawn.owner().to_string();
+  if (!owner.empty()) return owner == name_;
+  return s::FindSensorBlueprint(spawn.blueprint().to_string()) != nullptr;
+}
+
+std::string SensorsService::CheckSpawn(const msg::SpawnActor& spawn) const {
+  s::SensorSpawn sp;
+  sp.blueprint = spawn.blueprint().to_string();
+  for (const auto& a : spawn.attributes()) sp.attributes[a.key().to_string()] = a.value().to_string();
+  return s::CheckSensorSpawn(sp);
+}
+
+// The town's meshes (the ones the renderer draws) and the map's geo reference, from the
+// map the coordinator publishes.
+void SensorsService::LoadTown(const msg::WorldInfo& world) {
+  if (world.map_name().to_string().empty()) {
+    town_meshes_.reset();
+    town_hash_ = 0;
+    geo_ = {};
+    return;
+  }
+  if (world.map_hash() == town_hash_ && town_meshes_) return;
+  std::optional<msg::MapData> data;
+  {
+    std::unique_lock<std::mutex> lock(map_mu_);
+    map_cv_.wait_for(lock, std::chrono::seconds(30), [&] { return map_ && map_->content_hash() == world.map_hash(); });
+    if (map_ && map_->content_hash() == world.map_hash()) data = map_;
+  }
+  if (!data) throw InputError("sensors: no map '" + world.map_name().to_string() + "' from the coordinator within 30 s");
+  const map::Map town = map::Map::FromString(data->opendrive(), data->name().to_string());
+  const map::Scene scene = data->scene().empty() ? map::GenerateScene(town, world.seed())
+                                                 : map::SceneFromYaml(data->scene(), data->name().to_string() + ".scene.yaml");
+  town_meshes_ = std::make_shared<const std::vector<map::Mesh>>(map::BuildWorldMeshes(town, scene));
+  geo_ = s::ParseGeoReference(town.Data().header.geo_reference);
+  town_hash_ = world.map_hash();
+  spdlog::info("town '{}': {} triangles for ray casting, geo reference {:.6f}, {:.6f}", data->name().to_string(),
+               map::TotalTriangles(*town_meshes_), geo_.latitude, geo_.longitude);
+}
+
+void SensorsService::BeginRun(const msg::WorldInfo& world) {
+  LoadTown(world);
+  mode_ = world.settings().perception_mode();
+  seed_ = world.seed();
+  run_ = world.run();
+  weather_ = s::Weather{world.weather().precipitation(), world.weather().fog_density()};
+  // The physics inputs, by what the required services simulate (never by their names):
+  // vehicles or walkers come in GroundState, drones in AirState, and each of those
+  // services publishes one PhysicsEvents batch per frame.
+  const std::vector<std::string> required = RequiredServices(world);
+  if (!declarations_.WaitFor(required, std::chrono::milliseconds(static_cast<int64_t>(options_.input_timeout_s * 1000)))) {
+    throw InputError("sensors: not every required service declared its blueprints within the input timeout");
+  }
+  event_publishers_.clear();
+  const auto ground = declarations_.Declaring(msg::ActorKind::ACTOR_VEHICLE, required);
+  const auto walkers = declarations_.Declaring(msg::ActorKind::ACTOR_WALKER, required);
+  const auto air = declarations_.Declaring(msg::ActorKind::ACTOR_DRONE, required);
+  ground_in_run_ = !ground.empty() || !walkers.empty();
+  air_in_run_ = !air.empty();
+  for (const auto* list : {&ground, &walkers, &air}) event_publishers_.insert(list->begin(), list->end());
+  world_ = std::make_unique<s::SensorWorld>(seed_, geo_);
+  world_->set_weather(weather_);
+  if (town_meshes_) world_->scene().SetStatic(*town_meshes_);
+  files_.reset();
+  spdlog::info("run {}: seed {}, perception {}, inputs:{}{}", run_, seed_,
+               mode_ == msg::PerceptionMode::PERCEPTION_PIPELINED ? "pipelined" : "strict", ground_in_run_ ? " GroundState" : "",
+               air_in_run_ ? " AirState" : "");
+}
+
+void SensorsService::Fail(const msg::FrameStamp& stamp, uint32_t actor, const std::string& why) {
+  msg::SimEvent e;
+  e.stamp(stamp);
+  e.service(name_);
+  e.kind(msg::EventKind::EVENT_COMMAND_FAILED);
+  e.actor(actor);
+  e.message(why.substr(0, 511));
+  if (!replaying()) event_writer_.Write(e);
+  spdlog::warn("actor {}: {}", actor, why);
+}
+
+void SensorsService::Apply(const msg::Command& c, const msg::FrameStamp& stamp) {
+  const auto& b = c.body();
+  switch (b._d()) {
+    case msg::CommandKind::CMD_SPAWN_ACTOR: {
+      const auto& sp = b.spawn_actor();
+      if (!Owns(sp)) return;
+      s::SensorSpawn spawn;
+      spawn.id = sp.actor();
+      spawn.blueprint = sp.blueprint().to_string();
+      for (const auto& a : sp.attributes()) spawn.attributes[a.key().to_string()] = a.value().to_string();
+      spawn.parent = sp.parent();
+      spawn.transform = ToPose(sp.transform());
+      if (std::string why = world_->Add(spawn); !why.empty()) Fail(stamp, sp.actor(), "spawn failed: " + why);
+      return;
+    }
+    case msg::CommandKind::CMD_DESTROY_ACTOR: world_->Remove(b.destroy_actor().actor()); return;
+    case msg::CommandKind::CMD_SET_WEATHER:
+      weather_ = s::Weather{b.weather().precipitation(), b.weather().fog_density()};
+      world_->set_weather(weather_);
+      return;
+    default: return;
+  }
+}
+
+s::WorldFrame SensorsService::Gather(const msg::Tick& tick, uint64_t frame, s::FrameEvents* events) {
+  s::WorldFrame f;
+  f.run = tick.run();
+  f.frame = frame;
+  f.sim_time = tick.sim_time() - static_cast<double>(tick.frame() - frame) * tick.dt();
+  const auto timeout = std::chrono::milliseconds(static_cast<int64_t>(options_.input_timeout_s * 1000));
+  if (ground_in_run_) {
+    auto g = ground_.WaitFor(tick.run(), frame, timeout);
+    if (!g) throw InputError("sensors: no GroundState of frame " + std::to_string(frame) + " within the input timeout");
+    f.sim_time = g->stamp().sim_time();
+    for (const auto& v : g->vehicles()) {
+      s::Actor a;
+      a.id = v.actor();
+      a.kind = s::ActorKind::kVehicle;
+      a.blueprint = v.blueprint().to_string();
+      a.pose = ToPose(v.transform());
+      a.half_extents = ToVec(v.half_extents());
+      a.velocity = ToVec(v.velocity());
+      a.angular_velocity = ToVec(v.angular_velocity());
+      f.actors.push_back(std::move(a));
+    }
+    for (const auto& w : g->walkers()) {
+      s::Actor a;
+      a.id = w.actor();
+      a.kind = s::ActorKind::kWalker;
+      a.blueprint = w.blueprint().to_string();
+      a.pose = ToPose(w.transform());
+      a.half_extents = ToVec(w.half_extents());
+      a.velocity = ToVec(w.velocity());
+      f.actors.push_back(std::move(a));
+    }
+  }
+  if (air_in_run_) {
+    auto air = air_.WaitFor(tick.run(), frame, timeout);
+    if (!air) throw InputError("sensors: no AirState of frame " + std::to_string(frame) + " within the input timeout");
+    f.sim_time = air->stamp().sim_time();
+    for (const auto& d : air->drones()) {
+      s::Actor a;
+      a.id = d.actor();
+      a.kind = s::ActorKind::kDrone;
+      a.blueprint = d.blueprint().to_string();
+      a.pose = ToPose(d.transform());
+      a.half_extents = kDroneHalfExtents;
+      a.velocity = ToVec(d.linear_velocity());
+      a.angular_velocity = a.pose.orientation * ToVec(d.angular_velocity());  // body -> world
+      f.actors.push_back(std::move(a));
+    }
+  }
+  std::sort(f.actors.begin(), f.actors.end(), [](const s::Actor& a, const s::Actor& b) { return a.id < b.id; });
+  if (world_->HasEventSensors() && !event_publishers_.empty()) {
+    auto batches = events_.WaitFor(tick.run(), frame, event_publishers_, timeout);
+    if (!batches) throw InputError("sensors: no PhysicsEvents of frame " + std::to_string(frame) + " from every physics service within the input timeout");
+    for (const auto& b : *batches) {
+      for (const auto& c : b.collisions()) {
+        events->collisions.push_back(s::CollisionEvent{c.actor(), c.other_actor(), FromWire(c.other_kind()), c.other_semantic_tag(),
+                                                       ToVec(c.normal_impulse()), ToVec(c.location())});
+      }
+      for (const auto& l : b.lane_invasions()) {
+        s::LaneInvasionEvent e;
+        e.actor = l.actor();
+        for (const auto& m : l.crossed()) {
+          e.crossed.push_back(s::LaneMarking{static_cast<int>(m.type()), m.color().to_string(), m.width(), m.lane_change_left(),
+                                             m.lane_change_right()});
+        }
+        events->lane_invasions.push_back(std::move(e));
+      }
+    }
+  }
+  return f;
+}
+
+void SensorsService::Step(const msg::Tick& tick) {
+  msg::FrameStamp tick_stamp;
+  tick_stamp.run(tick.run());
+  tick_stamp.frame(tick.frame());
+  tick_stamp.sim_time(tick.sim_time());
+  for (const auto& c : tick.commands()) Apply(c, tick_stamp);
+  // A replacement cannot rebuild past samples (their physics inputs are gone): it keeps
+  // the sensor list and samples from the frame it takes over.
+  if (replaying()) return;
+  const uint64_t frame = PerceptionFrame(mode_, tick.frame());
+  if (frame < 1 || world_->size() == 0) return;
+  s::FrameEvents events;
+  const s::WorldFrame f = Gather(tick, frame, &events);
+  const s::StepOutput out = world_->Step(f, tick.dt(), events);
+  msg::FrameStamp stamp;
+  stamp.run(tick.run());
+  stamp.frame(frame);
+  stamp.sim_time(f.sim_time);
+  Publish(out, stamp);
+  if (!options_.output_dir.empty()) {
+    if (!files_) files_ = std::make_unique<SampleWriter>(options_.output_dir + "/run" + std::to_string(run_) + "/sensors", tick.frame() <= 2);
+    files_->Write(out, frame, f.sim_time);
+  }
+}
+
+void SensorsService::Publish(const s::StepOutput& out, const msg::FrameStamp& stamp) {
+  for (const auto& t : out.point_clouds) {
+    msg::PointCloud m;
+    m.sensor(t.sensor);
+    m.stamp(stamp);
+    m.sensor_pose(FromPose(t.pose));
+    m.format(t.data.semantic ? msg::PointFormat::POINTS_SEMANTIC : msg::PointFormat::POINTS_XYZI);
+    m.point_count(t.data.point_count);
+    m.point_step(t.data.point_step);
+    m.points_per_channel(t.data.points_per_channel);
+    m.data(t.data.data);
+    point_cloud_writer_.Write(m);
+  }
+  for (const auto& t : out.radar) {
+    msg::RadarScan m;
+    m.sensor(t.sensor);
+    m.stamp(stamp);
+    m.sensor_pose(FromPose(t.pose));
+    std::vector<msg::RadarDetection> dets;
+    dets.reserve(t.data.size());
+    for (const auto& d : t.data) {
+      msg::RadarDetection r;
+      r.velocity(d.velocity);
+      r.azimuth(d.azimuth);
+      r.altitude(d.altitude);
+      r.depth(d.depth);
+      dets.push_back(r);
+    }
+    m.detections(std::move(dets));
+    radar_writer_.Write(m);
+  }
+  for (const auto& t : out.imu) {
+    msg::Imu m;
+    m.sensor(t.sensor);
+    m.stamp(stamp);
+    m.accelerometer(FromVec(t.data.accelerometer));
+    m.gyroscope(FromVec(t.data.gyroscope));
+    m.compass(t.data.compass);
+    m.orientation(FromQuat(t.data.orientation));
+    imu_writer_.Write(m);
+  }
+  for (const auto& t : out.gnss) {
+    msg::Gnss m;
+    m.sensor(t.sensor);
+    m.stamp(stamp);
+    m.latitude(t.data.latitude);
+    m.longitude(t.data.longitude);
+    m.altitude(t.data.altitude);
+    m.eph(t.data.eph);
+    m.epv(t.data.epv);
+    m.fix(t.data.fix);
+    gnss_writer_.Write(m);
+  }
+  for (const auto& t : out.barometer) {
+    msg::Barometer m;
+    m.sensor(t.sensor);
+    m.stamp(stamp);
+    m.altitude(t.data.altitude);
+    m.pressure(t.data.pressure);
+    m.qnh(t.data.qnh);
+    barometer_writer_.Write(m);
+  }
+  for (const auto& t : out.magnetometer) {
+    msg::Magnetometer m;
+    m.sensor(t.sensor);
+    m.stamp(stamp);
+    m.magnetic_field(FromVec(t.data));
+    magnetometer_writer_.Write(m);
+  }
+  for (const auto& t : out.distance) {
+    msg::DistanceMeasurement m;
+    m.sensor(t.sensor);
+    m.stamp(stamp);
+    m.sensor_pose(FromPose(t.pose));
+    m.distance(t.data.distance);
+    m.min_distance(t.data.min_distance);
+    m.max_distance(t.data.max_distance);
+    distance_writer_.Write(m);
+  }
+  for (const auto& t : out.obstacle) {
+    msg::ObstacleDetection m;
+    m.sensor(t.sensor);
+    m.stamp(stamp);
+    m.actor(t.parent);
+    m.other_actor(t.data.other_actor);
+    m.other_kind(ToWire(t.data.other_kind));
+    m.distance(t.data.distance);
+    obstacle_writer_.Write(m);
+  }
+  for (const auto& t : out.collision) {
+    msg::CollisionEvent m;
+    m.sensor(t.sensor);
+    m.stamp(stamp);
+    m.actor(t.parent);
+    m.other_actor(t.data.event.other_actor);
+    m.other_kind(ToWire(t.data.event.other_kind));
+    m.normal_impulse(FromVec(t.data.event.normal_impulse));
+    collision_writer_.Write(m);
+  }
+  for (const auto& t : out.lane_invasion) {
+    msg::LaneInvasionEvent m;
+    m.sensor(t.sensor);
+    m.stamp(stamp);
+    m.actor(t.parent);
+    std::vector<msg::LaneMarking> crossed;
+    for (const auto& c : t.data.crossed) crossed.push_back(ToWire(c));
+    m.crossed(crossed);
+    lane_invasion_writer_.Write(m);
+  }
+}
+
+}  // namespace lockstep

@@ -1,0 +1,175 @@
+#include "lockstep/sensors/blueprints.h"
+
+#include <charconv>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace lockstep::sensors {
+
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+AttributeSpec F(const std::string& id, double def, double min = -kInf, double max = kInf) {
+  char buf[64];
+  auto [end, ec] = std::to_chars(buf, buf + sizeof buf, def);  // shortest text that reads back exactly
+  return {id, AttrType::kFloat, std::string(buf, ec == std::errc() ? end : buf), min, max};
+}
+AttributeSpec I(const std::string& id, int64_t def, double min, double max) {
+  return {id, AttrType::kInt, std::to_string(def), min, max};
+}
+AttributeSpec B(const std::string& id, bool def) { return {id, AttrType::kBool, def ? "true" : "false"}; }
+AttributeSpec S(const std::string& id, const std::string& def) { return {id, AttrType::kString, def}; }
+
+// Every sensor: role_name, and sensor_tick (s between samples, 0 = every frame).
+std::vector<AttributeSpec> Common(std::vector<AttributeSpec> more, bool ticked = true) {
+  std::vector<AttributeSpec> v{S("role_name", "")};
+  if (ticked) v.push_back(F("sensor_tick", 0.0, 0, 3600));
+  v.insert(v.end(), more.begin(), more.end());
+  return v;
+}
+
+std::vector<AttributeSpec> LidarAttributes(bool semantic) {
+  std::vector<AttributeSpec> v{I("channels", 32, 1, 256),          F("range", 10.0, 0.1, 10000),
+                               I("points_per_second", 56000, 1, 1e8), F("rotation_frequency", 10.0, 0.001, 1000),
+                               F("upper_fov", 10.0, -90, 90),        F("lower_fov", -30.0, -90, 90),
+                               F("horizontal_fov", 360.0, 0.001, 360)};
+  if (!semantic) {
+    for (auto a : {F("atmosphere_attenuation_rate", 0.004, 0, 10), F("dropoff_general_rate", 0.45, 0, 1),
+                   F("dropoff_intensity_limit", 0.8, 0, 1), F("dropoff_zero_intensity", 0.4, 0, 1), F("noise_stddev", 0.0, 0, 100),
+                   I("noise_seed", 0, 0, 4294967295.0)}) {
+      v.push_back(a);
+    }
+  }
+  return Common(v);
+}
+
+std::vector<SensorBlueprint> Build() {
+  // AirSim's IMU bias instability (random walk per sqrt(s)), in SI units.
+  const double gyro_bias_stability = 4.6 / 3600 * M_PI / 180;  // 4.6 deg/h
+  const double accel_bias_stability = 36e-6 * 9.80665;         // 36 ug
+  return {
+      {"sensor.lidar.ray_cast", SensorType::kLidar, LidarAttributes(false)},
+      {"sensor.lidar.ray_cast_semantic", SensorType::kSemanticLidar, LidarAttributes(true)},
+      {"sensor.other.radar", SensorType::kRadar,
+       Common({F("horizontal_fov", 30.0, 0.001, 179), F("vertical_fov", 30.0, 0.001, 179), F("range", 100.0, 0.1, 10000),
+               I("points_per_second", 1500, 1, 1e8), I("noise_seed", 0, 0, 4294967295.0)})},
+      {"sensor.other.imu", SensorType::kImu,
+       Common({F("noise_accel_stddev_x", 0.0, 0, 1e3), F("noise_accel_stddev_y", 0.0, 0, 1e3), F("noise_accel_stddev_z", 0.0, 0, 1e3),
+               F("noise_gyro_stddev_x", 0.0, 0, 1e3), F("noise_gyro_stddev_y", 0.0, 0, 1e3), F("noise_gyro_stddev_z", 0.0, 0, 1e3),
+               F("noise_gyro_bias_x", 0.0, -1e3, 1e3), F("noise_gyro_bias_y", 0.0, -1e3, 1e3), F("noise_gyro_bias_z", 0.0, -1e3, 1e3),
+               F("noise_gyro_bias_stability", gyro_bias_stability, 0, 1e3),
+               F("noise_accel_bias_stability", accel_bias_stability, 0, 1e3), I("noise_seed", 0, 0, 4294967295.0)})},
+      {"sensor.other.gnss", SensorType::kGnss,
+       Common({F("noise_alt_bias", 0.0, -1e6, 1e6), F("noise_alt_stddev", 0.0, 0, 1e6), F("noise_lat_bias", 0.0, -90, 90),
+               F("noise_lat_stddev", 0.0, 0, 90), F("noise_lon_bias", 0.0, -180, 180), F("noise_lon_stddev", 0.0, 0, 180),
+               I("noise_seed", 0, 0, 4294967295.0)})},
+      {"sensor.other.barometer", SensorType::kBarometer,
+       Common({F("qnh", 1013.25, 800, 1100), F("noise_pressure_stddev", 2.7, 0, 1e4), F("drift_pressure_factor_sigma", 0.0365 / 20, 0, 1),
+               F("drift_pressure_factor_tau", 3600.0, 0.001, 1e9), I("noise_seed", 0, 0, 4294967295.0)})},
+      {"sensor.other.magnetometer", SensorType::kMagnetometer,
+       Common({F("noise_stddev", 0.005, 0, 100), F("noise_bias", 0.0, -100, 100), F("scale_factor", 1.0, 0, 100),
+               I("noise_seed", 0, 0, 4294967295.0)})},
+      {"sensor.other.distance", SensorType::kDistance,
+       Common({F("min_distance", 0.2, 0, 1e4), F("max_distance", 40.0, 0.01, 1e4), F("noise_stddev", 0.2, 0, 100),
+               I("noise_seed", 0, 0, 4294967295.0)})},
+      {"sensor.other.obstacle", SensorType::kObstacle,
+       Common({F("distance", 5.0, 0, 1e4), F("hit_radius", 0.5, 0, 100), B("only_dynamics", false), B("debug_linetrace", false)})},
+      {"sensor.other.collision", SensorType::kCollision, Common({}, false)},
+      {"sensor.other.lane_invasion", SensorType::kLaneInvasion, Common({}, false)},
+  };
+}
+
+bool ParseNumber(const std::string& s, double* out) {
+  if (s.empty()) return false;
+  auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), *out);
+  return ec == std::errc() && p == s.data() + s.size() && std::isfinite(*out);
+}
+
+const char* TypeName(AttrType t) {
+  switch (t) {
+    case AttrType::kBool: return "bool";
+    case AttrType::kInt: return "int";
+    case AttrType::kFloat: return "float";
+    case AttrType::kString: return "string";
+  }
+  return "?";
+}
+
+std::string CheckValue(const AttributeSpec& a, const std::string& v) {
+  auto bad = [&](const std::string& why) { return "attribute '" + a.id + "' (" + TypeName(a.type) + "): " + why + ", got '" + v + "'"; };
+  double x = 0;
+  switch (a.type) {
+    case AttrType::kString: return {};
+    case AttrType::kBool:
+      return v == "true" || v == "false" || v == "True" || v == "False" ? std::string() : bad("expected true or false");
+    case AttrType::kInt:
+      if (!ParseNumber(v, &x) || x != std::floor(x)) return bad("expected an integer");
+      break;
+    case AttrType::kFloat:
+      if (!ParseNumber(v, &x)) return bad("expected a finite number");
+      break;
+  }
+  if (x < a.min || x > a.max) {
+    std::ostringstream r;
+    r << "out of range [" << a.min << ", " << a.max << "]";
+    return bad(r.str());
+  }
+  return {};
+}
+
+}  // namespace
+
+const std::vector<SensorBlueprint>& SensorBlueprints() {
+  static const std::vector<SensorBlueprint> all = Build();
+  return all;
+}
+
+const SensorBlueprint* FindSensorBlueprint(const std::string& id) {
+  for (const auto& bp : SensorBlueprints()) {
+    if (bp.id == id) return &bp;
+  }
+  return nullptr;
+}
+
+std::string ResolveAttributes(const SensorBlueprint& bp, const std::map<std::string, std::string>& given, Attributes* out) {
+  Attributes r;
+  for (const auto& a : bp.attributes) r.values_[a.id] = a.default_value;
+  for (const auto& [key, value] : given) {
+    const AttributeSpec* spec = nullptr;
+    for (const auto& a : bp.attributes) {
+      if (a.id == key) spec = &a;
+    }
+    if (!spec) {
+      std::string known;
+      for (const auto& a : bp.attributes) known += (known.empty() ? "" : ", ") + a.id;
+      return "blueprint '" + bp.id + "' has no attribute '" + key + "' (it has: " + known + ")";
+    }
+    if (std::string why = CheckValue(*spec, value); !why.empty()) return bp.id + ": " + why;
+    r.values_[key] = value;
+    r.given_[key] = true;
+  }
+  *out = std::move(r);
+  return {};
+}
+
+double Attributes::Float(const std::string& id) const {
+  auto it = values_.find(id);
+  if (it == values_.end()) throw std::logic_error("sensors: no attribute '" + id + "'");
+  double x = 0;
+  ParseNumber(it->second, &x);
+  return x;
+}
+int64_t Attributes::Int(const std::string& id) const { return static_cast<int64_t>(Float(id)); }
+bool Attributes::Bool(const std::string& id) const {
+  const std::string& v = String(id);
+  return v == "true" || v == "True";
+}
+const std::string& Attributes::String(const std::string& id) const {
+  auto it = values_.find(id);
+  if (it == values_.end()) throw std::logic_error("sensors: no attribute '" + id + "'");
+  return it->second;
+}
+
+}  // namespace lockstep::sensors

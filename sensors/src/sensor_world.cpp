@@ -1,0 +1,200 @@
+#include "lockstep/sensors/sensor_world.h"
+
+#include <cmath>
+#include <variant>
+
+namespace lockstep::sensors {
+
+size_t StepOutput::size() const {
+  return point_clouds.size() + radar.size() + imu.size() + gnss.size() + barometer.size() + magnetometer.size() +
+         distance.size() + obstacle.size() + collision.size() + lane_invasion.size();
+}
+
+namespace {
+
+using Model = std::variant<std::monostate, Lidar, Radar, Imu, Gnss, Barometer, Magnetometer, DistanceSensor, ObstacleDetector>;
+
+// Builds the model of a checked spawn.
+Model MakeModel(SensorType type, const Attributes& a, uint64_t seed) {
+  switch (type) {
+    case SensorType::kLidar: return Lidar(a, false, seed);
+    case SensorType::kSemanticLidar: return Lidar(a, true, seed);
+    case SensorType::kRadar: return Radar(a, seed);
+    case SensorType::kImu: return Imu(a, seed);
+    case SensorType::kGnss: return Gnss(a, seed);
+    case SensorType::kBarometer: return Barometer(a, seed);
+    case SensorType::kMagnetometer: return Magnetometer(a, seed);
+    case SensorType::kDistance: return DistanceSensor(a, seed);
+    case SensorType::kObstacle: return ObstacleDetector(a);
+    case SensorType::kCollision:
+    case SensorType::kLaneInvasion: return std::monostate{};
+  }
+  return std::monostate{};
+}
+
+// Combinations a declaration cannot express.
+std::string CrossCheck(const SensorBlueprint& bp, const Attributes& a) {
+  if (bp.type == SensorType::kLidar || bp.type == SensorType::kSemanticLidar) {
+    if (a.Float("upper_fov") < a.Float("lower_fov")) {
+      return bp.id + ": upper_fov (" + a.String("upper_fov") + ") is below lower_fov (" + a.String("lower_fov") + ")";
+    }
+  }
+  if (bp.type == SensorType::kDistance && a.Float("min_distance") > a.Float("max_distance")) {
+    return bp.id + ": min_distance is above max_distance";
+  }
+  return {};
+}
+
+}  // namespace
+
+struct SensorWorld::Sensor {
+  SensorSpawn spawn;
+  SensorType type;
+  double tick = 0;      // s, sensor_tick (0 = every frame)
+  bool started = false;
+  double t0 = 0;        // s, time of the first sample
+  uint64_t next = 0;    // index of the next due sample: due at t0 + next * tick
+  double last = 0;      // s, time of the last sample
+  Model model;
+
+  // sensor_tick as CARLA's actor tick interval: sampled at the first frame, then at the
+  // first frame at or after each multiple of sensor_tick (no drift, no doubling).
+  bool Due(double t, double dt, double* elapsed) {
+    if (!started) {
+      started = true;
+      t0 = t;
+      next = 0;
+      last = t - dt;
+    }
+    if (tick > 0 && t + 1e-9 < t0 + static_cast<double>(next) * tick) return false;
+    // Whole nanoseconds: k * dt - (k - 1) * dt is not dt to the last bit, and a slice of
+    // pps * dt / channels = 87.5 points must not flip between 87 and 88.
+    *elapsed = std::round((t - last) * 1e9) / 1e9;
+    last = t;
+    if (tick > 0) next = static_cast<uint64_t>(std::floor((t - t0) / tick + 1e-9)) + 1;
+    return true;
+  }
+};
+
+std::string CheckSensorSpawn(const SensorSpawn& spawn) {
+  const SensorBlueprint* bp = FindSensorBlueprint(spawn.blueprint);
+  if (!bp) return "'" + spawn.blueprint + "' is not a sensor blueprint of this service";
+  Attributes a;
+  if (std::string why = ResolveAttributes(*bp, spawn.attributes, &a); !why.empty()) return why;
+  return CrossCheck(*bp, a);
+}
+
+SensorWorld::SensorWorld(uint64_t run_seed, GeoReference geo) : run_seed_(run_seed), geo_(geo) {}
+SensorWorld::~SensorWorld() = default;
+
+std::string SensorWorld::Add(const SensorSpawn& spawn) {
+  const SensorBlueprint* bp = FindSensorBlueprint(spawn.blueprint);
+  if (!bp) return "'" + spawn.blueprint + "' is not a sensor blueprint of this service";
+  if (sensors_.count(spawn.id)) return "sensor " + std::to_string(spawn.id) + " exists already";
+  Attributes a;
+  if (std::string why = ResolveAttributes(*bp, spawn.attributes, &a); !why.empty()) return why;
+  if (std::string why = CrossCheck(*bp, a); !why.empty()) return why;
+  auto s = std::make_unique<Sensor>();
+  s->spawn = spawn;
+  s->type = bp->type;
+  if (bp->type != SensorType::kCollision && bp->type != SensorType::kLaneInvasion) s->tick = a.Float("sensor_tick");
+  // The sensor's noise stream: run seed, its actor id and its noise_seed attribute.
+  const uint64_t noise_seed = a.Given("noise_seed") ? static_cast<uint64_t>(a.Int("noise_seed")) : 0;
+  s->model = MakeModel(bp->type, a, MixSeed(run_seed_, spawn.id, noise_seed));
+  sensors_[spawn.id] = std::move(s);
+  return {};
+}
+
+bool SensorWorld::Remove(uint32_t id) { return sensors_.erase(id) > 0; }
+
+bool SensorWorld::HasEventSensors() const {
+  for (const auto& [id, s] : sensors_) {
+    if (s->type == SensorType::kCollision || s->type == SensorType::kLaneInvasion) return true;
+  }
+  return false;
+}
+
+bool SensorWorld::HasRaySensors() const {
+  for (const auto& [id, s] : sensors_) {
+    switch (s->type) {
+      case SensorType::kLidar:
+      case SensorType::kSemanticLidar:
+      case SensorType::kRadar:
+      case SensorType::kDistance:
+      case SensorType::kObstacle: return true;
+      default: break;
+    }
+  }
+  return false;
+}
+
+StepOutput SensorWorld::Step(const WorldFrame& frame, double dt, const FrameEvents& events) {
+  StepOutput out;
+  if (HasRaySensors()) scene_.SetActors(frame.actors);
+  for (auto& [id, s] : sensors_) {
+    const SensorSpawn& sp = s->spawn;
+    const Actor* parent = sp.parent ? frame.Find(sp.parent) : nullptr;
+    if (sp.parent && !parent) continue;  // not in this frame (yet, or any more)
+    if (s->type == SensorType::kCollision) {
+      for (const auto& e : events.collisions) {
+        if (parent && e.actor == sp.parent) out.collision.push_back({id, sp.parent, parent->pose, CollisionSample{e}});
+      }
+      continue;
+    }
+    if (s->type == SensorType::kLaneInvasion) {
+      for (const auto& e : events.lane_invasions) {
+        if (parent && e.actor == sp.parent) out.lane_invasion.push_back({id, sp.parent, parent->pose, LaneInvasionSample{e.crossed}});
+      }
+      continue;
+    }
+    double elapsed = 0;
+    if (!s->Due(frame.sim_time, dt, &elapsed)) continue;
+    const Pose pose = parent ? parent->pose.Compose(sp.transform) : sp.transform;
+    const Vec3 omega = parent ? parent->angular_velocity : Vec3::Zero();
+    const Vec3 velocity = parent ? Vec3(parent->velocity + omega.cross(pose.position - parent->pose.position)) : Vec3::Zero();
+    std::visit(
+        [&](auto& m) {
+          using M = std::decay_t<decltype(m)>;
+          if constexpr (std::is_same_v<M, Lidar>) {
+            out.point_clouds.push_back({id, sp.parent, pose, m.Scan(scene_, pose, elapsed, weather_)});
+          } else if constexpr (std::is_same_v<M, Radar>) {
+            out.radar.push_back({id, sp.parent, pose, m.Scan(scene_, frame, pose, elapsed)});
+          } else if constexpr (std::is_same_v<M, Imu>) {
+            out.imu.push_back({id, sp.parent, pose, m.Sample(pose, velocity, omega, elapsed)});
+          } else if constexpr (std::is_same_v<M, Gnss>) {
+            out.gnss.push_back({id, sp.parent, pose, m.Sample(geo_, pose, elapsed)});
+          } else if constexpr (std::is_same_v<M, Barometer>) {
+            out.barometer.push_back({id, sp.parent, pose, m.Sample(geo_, pose, elapsed)});
+          } else if constexpr (std::is_same_v<M, Magnetometer>) {
+            out.magnetometer.push_back({id, sp.parent, pose, m.Sample(geo_, pose)});
+          } else if constexpr (std::is_same_v<M, DistanceSensor>) {
+            out.distance.push_back({id, sp.parent, pose, m.Sample(scene_, pose, sp.parent)});
+          } else if constexpr (std::is_same_v<M, ObstacleDetector>) {
+            ObstacleSample o = m.Sample(scene_, pose, sp.parent);
+            if (o.other_kind != HitKind::kNone) out.obstacle.push_back({id, sp.parent, pose, o});
+          }
+        },
+        s->model);
+  }
+  return out;
+}
+
+uint64_t SensorWorld::StateHash() const {
+  uint64_t h = MixSeed(run_seed_, sensors_.size());
+  for (const auto& [id, s] : sensors_) {
+    const uint64_t fp = std::visit(
+        [](const auto& m) -> uint64_t {
+          using M = std::decay_t<decltype(m)>;
+          if constexpr (std::is_same_v<M, std::monostate> || std::is_same_v<M, ObstacleDetector>) {
+            return 0;
+          } else {
+            return m.Fingerprint();
+          }
+        },
+        s->model);
+    h = MixSeed(h, id, fp ^ s->next);
+  }
+  return h;
+}
+
+}  // namespace lockstep::sensors

@@ -1,0 +1,247 @@
+// The C++ client against the real coordinator, air_sim and a stand-in sensors service on
+// the in-process bus: ticks, spawns and their errors, drones with futures, batches, and
+// the no-lost-frames guarantee of listen() in synchronous mode.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <thread>
+
+#include "air_service.h"
+#include "fake_sensors.h"
+#include "lockstep/client/client.h"
+#include "lockstep/client/multirotor.h"
+#include "lockstep/coordinator/coordinator.h"
+
+namespace lockstep::client {
+namespace {
+
+class ClientTest : public ::testing::Test {
+ protected:
+  void Start(bool sync, uint64_t skip_frame = 0, double sensor_timeout = 10) {
+    LaunchConfig c;
+    c.world = DefaultWorldSettings();
+    c.world.synchronous_mode(sync);
+    c.world.service_timeout(30);
+    c.services.push_back({"air_sim", "air_sim", "", {}, true, false, "never"});
+    c.services.push_back({"sensors", "fake_sensors", "", {}, true, true, "never"});
+    bus_ = CreateInProcessBus();
+    coordinator_ = std::make_unique<Coordinator>(*bus_, c);
+    air_ = std::make_unique<AirService>(*bus_);
+    sensors_ = std::make_unique<testing::FakeSensors>(*bus_, "sensors", skip_frame);
+    air_runner_ = std::make_unique<ServiceRunner>(*bus_, ServiceOptions{"air_sim", "air_sim", false}, *air_);
+    sensor_runner_ = std::make_unique<ServiceRunner>(*bus_, ServiceOptions{"sensors", "fake_sensors", true}, *sensors_);
+    threads_.emplace_back([this] { air_runner_->Run(stop_); });
+    threads_.emplace_back([this] { sensor_runner_->Run(stop_); });
+    threads_.emplace_back([this] { coordinator_->Run(stop_); });
+    ClientOptions o;
+    o.bus = bus_.get();
+    o.name = "client-test";
+    o.sensor_timeout_s = sensor_timeout;
+    client_ = std::make_unique<Client>(o);
+    ASSERT_TRUE(client_->wait_ready(30)) << "services did not join";
+  }
+  void TearDown() override {
+    client_.reset();
+    stop_ = true;
+    for (auto& t : threads_) t.join();
+  }
+
+  std::unique_ptr<Bus> bus_;
+  std::unique_ptr<Coordinator> coordinator_;
+  std::unique_ptr<AirService> air_;
+  std::unique_ptr<testing::FakeSensors> sensors_;
+  std::unique_ptr<ServiceRunner> air_runner_, sensor_runner_;
+  std::vector<std::thread> threads_;
+  std::atomic<bool> stop_{false};
+  std::unique_ptr<Client> client_;
+  // What listen callbacks record: members, so they outlive the client even when an
+  // assertion ends a test early.
+  std::mutex mu_;
+  std::map<uint32_t, std::vector<uint64_t>> frames_;
+};
+
+TEST(ClientConnect, NoSimulationGivesAClearError) {
+  auto bus = CreateInProcessBus();
+  ClientOptions o;
+  o.bus = bus.get();
+  o.timeout_s = 0.2;
+  try {
+    Client c(o);
+    FAIL() << "connected to nothing";
+  } catch (const ClientError& e) {
+    EXPECT_NE(std::string(e.what()).find("no Lockstep simulation on DDS domain"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(ClientTest, TickReturnsConsecutiveFramesAndTheirState) {
+  Start(true);
+  const uint32_t drone = client_->spawn("drone.generic_quad", MakePose(47.75, 1.75, 0));
+  uint64_t last = client_->frame();
+  for (int i = 0; i < 20; ++i) {
+    const uint64_t k = client_->tick();
+    EXPECT_EQ(k, last + 1);
+    last = k;
+    const Snapshot s = client_->snapshot();
+    EXPECT_EQ(s.frame, k);
+    ASSERT_TRUE(s.air.has_value());
+    EXPECT_EQ(s.air->stamp().frame(), k);  // tick() waited for the frame's air state
+    EXPECT_NE(s.Drone(drone), nullptr);
+  }
+  auto info = client_->actor(drone);
+  ASSERT_TRUE(info.has_value());
+  EXPECT_EQ(info->blueprint, "drone.generic_quad");
+  EXPECT_EQ(info->kind, msg::ActorKind::ACTOR_DRONE);
+}
+
+TEST_F(ClientTest, TickInFreeRunningModeRaisesTheCoordinatorsReason) {
+  Start(false);
+  try {
+    client_->tick();
+    FAIL() << "tick accepted in free-running mode";
+  } catch (const CommandRejected& e) {
+    EXPECT_NE(e.reason().find("synchronous_mode"), std::string::npos) << e.reason();
+  }
+  EXPECT_GT(client_->wait_for_tick(10), 0u);
+}
+
+TEST_F(ClientTest, BadCallsRaiseWithTheServicesReason) {
+  Start(true);
+  auto reason = [&](auto&& f) -> std::string {
+    try {
+      f();
+    } catch (const CommandRejected& e) {
+      return e.reason();
+    }
+    return "(accepted)";
+  };
+  EXPECT_NE(reason([&] { client_->spawn("vehicle.does.not_exist", MakePose(0, 0, 0)); }).find("unknown blueprint"),
+            std::string::npos);
+  EXPECT_NE(reason([&] { client_->spawn("drone.generic_quad", MakePose(0, 0, 0), {{"no_such_attribute", "1"}}); })
+                .find("no_such_attribute"),
+            std::string::npos);
+  const uint32_t drone = client_->spawn("drone.generic_quad", MakePose(47.75, 1.75, 0));
+  client_->tick();
+  client_->destroy(drone);
+  EXPECT_NE(reason([&] { client_->destroy(drone); }).find("unknown actor"), std::string::npos);
+  const uint32_t other = client_->spawn("drone.generic_quad", MakePose(43.25, -1.75, 0));
+  msg::DroneCommand nan;
+  nan.actor(other);
+  nan.kind(msg::DroneCommandKind::DRONE_MOVE_TO_POSITION);
+  nan.velocity(2);
+  nan.target().x(std::numeric_limits<double>::quiet_NaN());
+  EXPECT_NE(reason([&] { client_->send_drone(nan); }).find("NaN"), std::string::npos);
+  std::string why;
+  EXPECT_FALSE(client_->try_spawn("nothing.here", MakePose(0, 0, 0), {}, 0, &why).has_value());
+  EXPECT_NE(why.find("unknown blueprint"), std::string::npos) << why;
+}
+
+TEST_F(ClientTest, BatchGivesOneReplyPerCommandInOrder) {
+  Start(true);
+  std::vector<msg::CommandBody> batch{SpawnBody("drone.generic_quad", MakePose(47.75, 1.75, 0)),
+                                      SpawnBody("no.such.blueprint", MakePose(0, 0, 0)),
+                                      SpawnBody("drone.hexa_x", MakePose(43.25, -1.75, 0))};
+  const auto replies = client_->SubmitBatch(batch);
+  ASSERT_EQ(replies.size(), 3u);
+  EXPECT_TRUE(replies[0].accepted());
+  EXPECT_FALSE(replies[1].accepted());
+  EXPECT_NE(replies[1].reason().to_string().find("unknown blueprint"), std::string::npos);
+  EXPECT_TRUE(replies[2].accepted());
+  EXPECT_NE(replies[0].actor(), replies[2].actor());
+}
+
+TEST_F(ClientTest, DroneFuturesCompleteWhenAirSimReportsCompletion) {
+  Start(true);
+  MultirotorClient mc(*client_);
+  const uint32_t id = client_->spawn("drone.generic_quad", MakePose(47.75, 1.75, 0), {{"role_name", "hero"}});
+  client_->tick();
+  EXPECT_EQ(mc.Resolve("hero"), id);
+  EXPECT_THROW(mc.takeoffAsync(20, "hero"), ClientError);  // no API control yet, as in AirSim
+  mc.enableApiControl(true, "hero");
+  ASSERT_TRUE(mc.armDisarm(true, "hero"));
+  CommandFuture takeoff = mc.takeoffAsync(20, "hero");
+  EXPECT_TRUE(takeoff.join(60));
+  const auto state = mc.getMultirotorState("hero");
+  EXPECT_NEAR(state.kinematics.position.z, -2.0, 0.3);  // NED: 2 m up from home
+  EXPECT_FALSE(state.landed);
+  ASSERT_TRUE(mc.moveToPositionAsync(4, 3, -6, 3, 60, NedDrivetrain::kMaxDegreeOfFreedom, {}, -1, "hero").join(120));
+  const auto p = mc.simGetVehiclePose("hero").first;
+  EXPECT_NEAR(p.x, 4, 0.5);   // north
+  EXPECT_NEAR(p.y, 3, 0.5);   // east
+  EXPECT_NEAR(p.z, -6, 0.5);  // up is negative
+  const msg::Vector3 enu = client_->snapshot().Drone(id)->transform().position();
+  EXPECT_NEAR(enu.x(), 47.75 + 3, 0.5);
+  EXPECT_NEAR(enu.y(), 1.75 + 4, 0.5);
+}
+
+TEST_F(ClientTest, SixSensorsDeliverEveryFrameOnceAndInOrderBeforeTickReturns) {
+  Start(true);
+  auto& mu = mu_;
+  auto& frames = frames_;
+  std::vector<uint32_t> ids;
+  for (int i = 0; i < 6; ++i) {
+    const std::string bp = i % 2 ? "sensor.camera.rgb" : "sensor.other.imu";
+    ids.push_back(client_->spawn(bp, MakePose(i, 0, 1)));
+  }
+  client_->tick();  // the spawn frame: frames after it are guaranteed
+  for (uint32_t id : ids) {
+    client_->listen(id, [&, id](const SensorSample& s) {
+      if (s.type == SensorType::kImu) {
+        EXPECT_EQ(s.As<msg::Imu>().accelerometer().z(), static_cast<double>(s.stamp.frame()));
+      }
+      if (s.type == SensorType::kImage) {
+        EXPECT_EQ(s.ByteCount(), 128u);
+      }
+      std::lock_guard<std::mutex> lock(mu);
+      frames[id].push_back(s.stamp.frame());
+    });
+  }
+  uint64_t first = 0, k = 0;
+  for (int t = 0; t < 500; ++t) {
+    k = client_->tick();
+    if (!first) first = k;
+    std::lock_guard<std::mutex> lock(mu);
+    for (uint32_t id : ids) {
+      ASSERT_FALSE(frames[id].empty()) << "sensor " << id << " at frame " << k;
+      ASSERT_EQ(frames[id].back(), k) << "sensor " << id << ": frame " << k << " not delivered before tick() returned";
+    }
+  }
+  std::lock_guard<std::mutex> lock(mu);
+  for (uint32_t id : ids) {
+    const auto& f = frames[id];
+    // Each frame exactly once, in order.
+    ASSERT_EQ(f.size(), 500u) << "sensor " << id;
+    for (size_t i = 0; i < f.size(); ++i) EXPECT_EQ(f[i], first + i);
+    EXPECT_EQ(client_->delivered(id), f.size());
+  }
+}
+
+TEST_F(ClientTest, ALateSensorIsNamedAndItsDataStillArrivesOnce) {
+  Start(true, /*skip_frame=*/5, /*sensor_timeout=*/0.5);
+  const uint32_t good = client_->spawn("sensor.other.imu", MakePose(0, 0, 1));
+  const uint32_t late = client_->spawn("sensor.other.imu", MakePose(0, 0, 1), {{"role_name", "late"}});
+  std::atomic<int> count{0};
+  client_->listen(good, [&](const SensorSample&) { ++count; });
+  client_->listen(late, [&](const SensorSample&) {});
+  bool named = false;
+  while (client_->frame() < 8) {
+    try {
+      client_->tick();
+    } catch (const SensorLate& e) {
+      EXPECT_EQ(e.frame(), 5u);
+      ASSERT_EQ(e.sensors().size(), 1u);
+      EXPECT_EQ(e.sensors()[0], late);
+      EXPECT_NE(std::string(e.what()).find(std::to_string(late)), std::string::npos);
+      named = true;
+    }
+  }
+  EXPECT_TRUE(named);
+  client_->stop(good);
+  EXPECT_FALSE(client_->is_listening(good));
+}
+
+}  // namespace
+}  // namespace lockstep::client

@@ -1,0 +1,281 @@
+// The sensors service behind the real coordinator with air_sim, on the in-process bus:
+// sensors spawned by a client attach to a drone or stand in the world, every sample is
+// stamped with the frame it shows (k in strict mode, k-1 in pipelined) and matches the
+// AirState of that frame, two sensors services each simulate the spawns they own, and a
+// bad attribute is reported with its reason.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <condition_variable>
+#include <map>
+#include <mutex>
+#include <thread>
+
+#include <Eigen/Geometry>
+
+#include "air_service.h"
+#include "lockstep/coordinator/coordinator.h"
+#include "lockstep/runtime/command_builders.h"
+#include "observer.h"
+#include "sensors_service.h"
+
+namespace lockstep {
+namespace {
+
+using namespace std::chrono_literals;
+
+class SensorsServiceTest : public ::testing::Test {
+ protected:
+  void Start(msg::PerceptionMode mode) {
+    LaunchConfig c;
+    c.world = DefaultWorldSettings();
+    c.world.synchronous_mode(true);
+    c.world.perception_mode(mode);
+    c.world.service_timeout(30);
+    c.services.push_back({"air_sim", "air_sim", "", {}, true, false, "never"});
+    c.services.push_back({"sensors_a", "sensors", "", {}, true, true, "never"});
+    c.services.push_back({"sensors_b", "sensors", "", {}, true, true, "never"});
+    bus_ = CreateInProcessBus();
+    air_reader_ = Reader<msg::AirState>(*bus_, topics::kAirState, [this](const msg::AirState& s, const SampleInfo&) {
+      std::lock_guard<std::mutex> lock(mu_);
+      air_[s.stamp().frame()] = s;
+    });
+    cloud_reader_ = Reader<msg::PointCloud>(*bus_, topics::kPointCloud, [this](const msg::PointCloud& p, const SampleInfo&) {
+      {
+        std::lock_guard<std::mutex> lock(mu_);
+        clouds_[p.sensor()].push_back(p);
+      }
+      cv_.notify_all();
+    });
+    imu_reader_ = Reader<msg::Imu>(*bus_, topics::kImu, [this](const msg::Imu& m, const SampleInfo&) {
+      {
+        std::lock_guard<std::mutex> lock(mu_);
+        imus_[m.sensor()].push_back(m);
+      }
+      cv_.notify_all();
+    });
+    event_reader_ = Reader<msg::SimEvent>(*bus_, topics::kEvent, [this](const msg::SimEvent& e, const SampleInfo&) {
+      std::lock_guard<std::mutex> lock(mu_);
+      events_.push_back(e.service().to_string() + ": " + e.message().to_string());
+    });
+    observer_ = std::make_unique<testing::Observer>(*bus_);
+    coordinator_ = std::make_unique<Coordinator>(*bus_, c);
+    air_service_ = std::make_unique<AirService>(*bus_);
+    sensors_a_ = std::make_unique<SensorsService>(*bus_, "sensors_a");
+    sensors_b_ = std::make_unique<SensorsService>(*bus_, "sensors_b");
+    runners_.push_back(std::make_unique<ServiceRunner>(*bus_, ServiceOptions{"air_sim", "air_sim", false}, *air_service_));
+    runners_.push_back(std::make_unique<ServiceRunner>(*bus_, ServiceOptions{"sensors_a", "sensors", true}, *sensors_a_));
+    runners_.push_back(std::make_unique<ServiceRunner>(*bus_, ServiceOptions{"sensors_b", "sensors", true}, *sensors_b_));
+    for (auto& r : runners_) threads_.emplace_back([this, &r] { r->Run(stop_); });
+    threads_.emplace_back([this] { coordinator_->Run(stop_); });
+  }
+  void TearDown() override {
+    stop_ = true;
+    for (auto& t : threads_) t.join();
+  }
+  msg::CommandReply Send(msg::CommandBody b) {
+    auto r = observer_->WaitReply(observer_->Send(std::move(b)), 10s);
+    EXPECT_TRUE(r.has_value());
+    return r.value_or(msg::CommandReply{});
+  }
+  uint32_t Spawn(const std::string& bp, const msg::Pose& pose, const AttributeList& attrs, uint32_t parent, const std::string& owner) {
+    msg::CommandBody b = SpawnBody(bp, pose, attrs, parent);
+    b.spawn_actor().owner(owner);
+    auto r = Send(b);
+    EXPECT_TRUE(r.accepted()) << r.reason();
+    return r.actor();
+  }
+  void Drone(uint32_t actor, msg::DroneCommandKind kind, uint64_t id, const msg::Vector3& target = {}) {
+    msg::DroneCommand d;
+    d.actor(actor);
+    d.kind(kind);
+    d.command_id(id);
+    d.velocity(4);
+    d.target(target);
+    msg::CommandBody b;
+    b.drone(d);
+    ASSERT_TRUE(Send(b).accepted());
+  }
+  void Tick(uint32_t n) {
+    msg::TickRequest t;
+    t.count(n);
+    msg::CommandBody b;
+    b.tick_request(t);
+    auto r = Send(b);
+    ASSERT_TRUE(r.accepted()) << r.reason();
+    ASSERT_TRUE(observer_->WaitUntil([&] { return observer_->last_frame() >= r.frame(); }, 60s));
+  }
+
+  // Spawns a drone with a LiDAR and an IMU on it (owned by sensors_a) and a semantic
+  // LiDAR standing in the world looking at it (owned by sensors_b), then flies it.
+  void Scenario() {
+    ASSERT_TRUE(observer_->WaitUntil([&] { auto s = observer_->status(); return s && s->state() == msg::RunState::RUN_READY; }, 30s));
+    drone_ = Spawn("drone.generic_quad", MakePose(0, 0, 0), {}, 0, "");
+    ASSERT_NE(drone_, 0u);
+    lidar_ = Spawn("sensor.lidar.ray_cast", MakePose(0, 0, -0.2), {{"range", "30"}, {"noise_seed", "3"}}, drone_, "sensors_a");
+    imu_ = Spawn("sensor.other.imu", MakePose(0, 0, 0), {}, drone_, "sensors_a");
+    watcher_ = Spawn("sensor.lidar.ray_cast_semantic", MakePose(-6, 0, 1),
+                     {{"range", "40"}, {"upper_fov", "60"}, {"lower_fov", "-10"}, {"channels", "64"}, {"points_per_second", "400000"}}, 0,
+                     "sensors_b");
+    Tick(1);
+    Drone(drone_, msg::DroneCommandKind::DRONE_ARM, 1);
+    Tick(1);
+    Drone(drone_, msg::DroneCommandKind::DRONE_TAKEOFF, 2);
+    Tick(40);
+    msg::Vector3 target;
+    target.x(3);
+    target.y(0);
+    target.z(4);
+    Drone(drone_, msg::DroneCommandKind::DRONE_MOVE_TO_POSITION, 3, target);
+    Tick(40);
+  }
+
+  void CheckAlignment(msg::PerceptionMode mode) {
+    const uint64_t last = observer_->last_frame();
+    ASSERT_GE(last, 80u);
+    const uint64_t shift = mode == msg::PerceptionMode::PERCEPTION_PIPELINED ? 1 : 0;
+    std::unique_lock<std::mutex> lock(mu_);
+    // Samples may be delivered after the FrameDone the observer saw: wait for them (or more).
+    cv_.wait_for(lock, 10s, [&] {
+      return clouds_[lidar_].size() >= last - shift && clouds_[watcher_].size() >= last - shift && imus_[imu_].size() >= last - shift;
+    });
+    // One sample per sensor per frame, stamped with the frame it shows: k (strict) or k-1.
+    for (uint32_t sensor : {lidar_, watcher_}) {
+      const auto& list = clouds_[sensor];
+      ASSERT_EQ(list.size(), last - shift) << "sensor " << sensor;
+      for (size_t i = 0; i < list.size(); ++i) EXPECT_EQ(list[i].stamp().frame(), i + 1) << "sensor " << sensor;
+    }
+    ASSERT_EQ(imus_[imu_].size(), last - shift);
+    // The drone LiDAR's pose is the drone's pose of the stamped frame, lowered 0.2 m.
+    size_t moving = 0;
+    for (const auto& pc : clouds_[lidar_]) {
+      const auto& state = air_.at(pc.stamp().frame());
+      ASSERT_EQ(state.drones().size(), 1u);
+      const auto& p = state.drones()[0].transform().position();
+      const auto& q = state.drones()[0].transform().orientation();
+      const Eigen::Vector3d expected =
+          Eigen::Vector3d(p.x(), p.y(), p.z()) + Eigen::Quaterniond(q.w(), q.x(), q.y(), q.z()).normalized() * Eigen::Vector3d(0, 0, -0.2);
+      EXPECT_NEAR(pc.sensor_pose().position().x(), expected.x(), 1e-9);
+      EXPECT_NEAR(pc.sensor_pose().position().y(), expected.y(), 1e-9);
+      EXPECT_NEAR(pc.sensor_pose().position().z(), expected.z(), 1e-9);
+      EXPECT_DOUBLE_EQ(pc.stamp().sim_time(), state.stamp().sim_time());
+      if (pc.stamp().frame() > 1 && std::abs(p.z() - air_.at(pc.stamp().frame() - 1).drones()[0].transform().position().z()) > 1e-3) ++moving;
+      EXPECT_EQ(pc.format(), msg::PointFormat::POINTS_XYZI);
+      EXPECT_EQ(pc.points_per_channel().size(), 32u);
+    }
+    EXPECT_GT(moving, 30u) << "the drone climbs and flies: a one-frame shift would show";
+    // The IMU's orientation is the drone's of the stamped frame.
+    for (const auto& m : imus_[imu_]) {
+      const auto& q = air_.at(m.stamp().frame()).drones()[0].transform().orientation();
+      EXPECT_NEAR(std::abs(m.orientation().w() * q.w() + m.orientation().x() * q.x() + m.orientation().y() * q.y() +
+                           m.orientation().z() * q.z()),
+                  1.0, 1e-9);
+    }
+    // The world LiDAR sees the drone once it is in the air.
+    size_t drone_points = 0;
+    for (const auto& pc : clouds_[watcher_]) {
+      ASSERT_EQ(pc.format(), msg::PointFormat::POINTS_SEMANTIC);
+      ASSERT_EQ(pc.point_step(), 24u);
+      for (uint32_t i = 0; i < pc.point_count(); ++i) {
+        uint32_t object = 0;
+        std::memcpy(&object, pc.data().data() + i * 24 + 16, 4);
+        if (object == drone_) ++drone_points;
+      }
+    }
+    EXPECT_GT(drone_points, 50u);
+  }
+
+  std::unique_ptr<Bus> bus_;
+  std::mutex mu_;
+  std::condition_variable cv_;
+  std::map<uint64_t, msg::AirState> air_;
+  std::map<uint32_t, std::vector<msg::PointCloud>> clouds_;
+  std::map<uint32_t, std::vector<msg::Imu>> imus_;
+  std::vector<std::string> events_;
+  Reader<msg::AirState> air_reader_;
+  Reader<msg::PointCloud> cloud_reader_;
+  Reader<msg::Imu> imu_reader_;
+  Reader<msg::SimEvent> event_reader_;
+  std::unique_ptr<testing::Observer> observer_;
+  std::unique_ptr<Coordinator> coordinator_;
+  std::unique_ptr<AirService> air_service_;
+  std::unique_ptr<SensorsService> sensors_a_, sensors_b_;
+  std::vector<std::unique_ptr<ServiceRunner>> runners_;
+  std::vector<std::thread> threads_;
+  std::atomic<bool> stop_{false};
+  uint32_t drone_ = 0, lidar_ = 0, imu_ = 0, watcher_ = 0;
+};
+
+TEST_F(SensorsServiceTest, StrictSamplesShowTheTicksFrame) {
+  Start(msg::PerceptionMode::PERCEPTION_STRICT);
+  Scenario();
+  CheckAlignment(msg::PerceptionMode::PERCEPTION_STRICT);
+  // Each service simulates what it owns.
+  EXPECT_TRUE(sensors_a_->world()->Has(lidar_));
+  EXPECT_TRUE(sensors_a_->world()->Has(imu_));
+  EXPECT_FALSE(sensors_a_->world()->Has(watcher_));
+  EXPECT_TRUE(sensors_b_->world()->Has(watcher_));
+  EXPECT_FALSE(sensors_b_->world()->Has(lidar_));
+  // No owner named: the coordinator picks one of the two, and only that one simulates it.
+  for (int i = 0; i < 4; ++i) {
+    const uint32_t gnss = Spawn("sensor.other.gnss", MakePose(0, 0, 0), {}, drone_, "");
+    Tick(1);
+    EXPECT_NE(sensors_a_->world()->Has(gnss), sensors_b_->world()->Has(gnss)) << "gnss " << gnss;
+  }
+}
+
+TEST_F(SensorsServiceTest, ABadAttributeIsRejectedWithItsReason) {
+  Start(msg::PerceptionMode::PERCEPTION_STRICT);
+  ASSERT_TRUE(observer_->WaitUntil([&] { auto s = observer_->status(); return s && s->state() == msg::RunState::RUN_READY; }, 30s));
+  msg::CommandBody b = SpawnBody("sensor.lidar.ray_cast", MakePose(0, 0, 2), {{"upper_fov", "-40"}});
+  b.spawn_actor().owner("sensors_a");
+  auto r = Send(b);
+  EXPECT_FALSE(r.accepted());
+  EXPECT_NE(r.reason().to_string().find("upper_fov (-40) is below lower_fov (-30)"), std::string::npos) << r.reason();
+  b = SpawnBody("sensor.lidar.ray_cast", MakePose(0, 0, 2), {{"channels", "1000"}});
+  r = Send(b);
+  EXPECT_FALSE(r.accepted());
+  EXPECT_NE(r.reason().to_string().find("channels"), std::string::npos) << r.reason();
+}
+
+TEST_F(SensorsServiceTest, PipelinedSamplesShowThePreviousFrame) {
+  Start(msg::PerceptionMode::PERCEPTION_PIPELINED);
+  Scenario();
+  CheckAlignment(msg::PerceptionMode::PERCEPTION_PIPELINED);
+}
+
+TEST_F(SensorsServiceTest, DeclaresCarlasSensorBlueprintsAndChecksSpawns) {
+  SensorsService s(*CreateInProcessBus(), "sensors");
+  const auto decl = s.Blueprints();
+  bool lidar = false;
+  for (const auto& bp : decl) {
+    EXPECT_EQ(bp.kind(), msg::ActorKind::ACTOR_SENSOR);
+    if (bp.id().to_string() != "sensor.lidar.ray_cast") continue;
+    lidar = true;
+    std::map<std::string, std::string> defaults;
+    for (const auto& a : bp.attributes()) defaults[a.id().to_string()] = a.default_value().to_string();
+    EXPECT_EQ(defaults["channels"], "32");
+    EXPECT_EQ(defaults["points_per_second"], "56000");
+    EXPECT_EQ(defaults["atmosphere_attenuation_rate"], "0.004");
+    EXPECT_EQ(defaults["sensor_tick"], "0");
+  }
+  EXPECT_TRUE(lidar);
+  msg::SpawnActor sp;
+  sp.blueprint("sensor.lidar.ray_cast");
+  sp.attributes(MakeAttributes({{"upper_fov", "-50"}}));
+  EXPECT_NE(s.CheckSpawn(sp).find("upper_fov"), std::string::npos);
+  sp.attributes(MakeAttributes({{"channels", "8"}}));
+  EXPECT_EQ(s.CheckSpawn(sp), "");
+  sp.owner("other_sensors");
+  EXPECT_FALSE(s.Owns(sp));
+  sp.owner("sensors");
+  EXPECT_TRUE(s.Owns(sp));
+  sp.owner("");
+  EXPECT_TRUE(s.Owns(sp)) << "no owner named: a sensor blueprint of ours";
+  sp.blueprint("sensor.camera.rgb");
+  EXPECT_FALSE(s.Owns(sp));
+}
+
+}  // namespace
+}  // namespace lockstep

@@ -46,13 +46,13 @@ def main():
             sensor.listen(q.put)
             queues.append((name, q))
         world.tick()  # the spawn frame
-        for q in queues:
-            while not q[1].empty():
-                q[1].get()
         for _ in range(args.ticks):
             frame = world.tick()
             for name, q in queues:
+                # As CARLA's synchronous_mode.py: skip what came before this frame (the spawn frame's data).
                 data = q.get(timeout=2.0)
+                while data.frame < frame:
+                    data = q.get(timeout=2.0)
                 assert data.frame == frame, '%s: frame %d, expected %d' % (name, data.frame, frame)
                 assert q.empty(), '%s: more than one sample for frame %d' % (name, frame)
         print('%d ticks: every sensor delivered every frame once (%s)' % (args.ticks, ', '.join(n for n, _ in queues)))

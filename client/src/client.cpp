@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -63,6 +64,18 @@ std::string Fmt(double v) {
   char b[32];
   std::snprintf(b, sizeof(b), "%g", v);
   return b;
+}
+
+// What every client of this process learned from spawn replies and ticks, so a client
+// created later (an airsim client after a carla one spawned the drones) knows the
+// attributes (role_name) of actors spawned before it joined: the wire has no actor list.
+struct SharedActors {
+  std::mutex mu;
+  std::map<std::pair<int, uint32_t>, std::map<uint32_t, ActorInfo>> by_run;  // (domain, run) -> actors
+};
+SharedActors& Shared() {
+  static SharedActors s;
+  return s;
 }
 
 }  // namespace
@@ -261,6 +274,21 @@ struct Client::Impl {
       cv.wait_for(lock, std::chrono::milliseconds(5));
       lock.unlock();
     }
+    // The latest ground / air state is kept by their writers (TRANSIENT_LOCAL): wait for it,
+    // so actors spawned before we joined are known at once (bounded: a stalled run has none).
+    lock.lock();
+    const auto state_deadline = std::min(deadline, Deadline(options.state_timeout_s));
+    WaitUntil(lock, state_deadline, [&] { return status.has_value(); });
+    if (status && status->frame() > 0) {
+      // The states of the last completed frame (FrameDone is TRANSIENT_LOCAL too): the
+      // writers replay several frames, and the newest must be in before we answer.
+      const uint32_t run = world->run();
+      auto has = [&](const auto& m) { return !m.empty() && m.rbegin()->first >= done; };
+      WaitUntil(lock, state_deadline, [&] {
+        return done.first == run && done.second > 0 && (!MemberOfKind("air_sim") || has(air)) &&
+               (!MemberOfKind("ground_sim") || has(ground));
+      });
+    }
   }
 
   // --- callbacks (mu held) ---
@@ -288,10 +316,39 @@ struct Client::Impl {
     for (const auto& at : s.attributes()) a.attributes.emplace_back(at.key().to_string(), at.value().to_string());
     a.spawn_pose = s.transform();
     a.spawn_frame = frame;
+    auto& shared = Shared();
+    std::lock_guard<std::mutex> lock(shared.mu);
+    shared.by_run[{options.domain, run}][id] = a;
+  }
+
+  // Our registry completed with what other clients of this process learned (mu held).
+  std::map<uint32_t, ActorInfo> MergedActors() const {
+    std::map<uint32_t, ActorInfo> out;
+    if (actors_run != world->run()) return out;
+    out = actors;
+    auto& shared = Shared();
+    std::lock_guard<std::mutex> lock(shared.mu);
+    auto it = shared.by_run.find({options.domain, actors_run});
+    if (it == shared.by_run.end()) return out;
+    for (const auto& [id, a] : it->second) {
+      auto mine = out.find(id);
+      if (mine == out.end()) {
+        // Only if our states list it: the shared copy may describe a destroyed actor.
+        continue;
+      }
+      if (mine->second.attributes.empty() && mine->second.blueprint == a.blueprint) mine->second = a;
+    }
+    return out;
   }
 
   void RemoveActor(uint32_t id) {
     actors.erase(id);
+    {
+      auto& shared = Shared();
+      std::lock_guard<std::mutex> lock(shared.mu);
+      auto it = shared.by_run.find({options.domain, actors_run});
+      if (it != shared.by_run.end()) it->second.erase(id);
+    }
     for (auto it = actors.begin(); it != actors.end();) {
       if (it->second.parent == id) {
         const uint32_t child = it->first;
@@ -457,6 +514,7 @@ struct Client::Impl {
       case SensorType::kCollision: MakeSensorReader(type, topics::kCollision); break;
       case SensorType::kLaneInvasion: MakeSensorReader(type, topics::kLaneInvasion); break;
       case SensorType::kObstacle: MakeSensorReader(type, topics::kObstacle); break;
+      case SensorType::kDistance: MakeSensorReader(type, topics::kDistance); break;
     }
   }
 
@@ -688,24 +746,46 @@ void Client::destroy(uint32_t actor) {
 }
 
 BlueprintLibrary Client::blueprints(double wait_s) const {
-  std::unique_lock<std::mutex> lock(impl_->mu);
-  impl_->WaitUntil(lock, Deadline(wait_s), [&] { return !impl_->declarations.empty(); });
-  return BlueprintLibrary(impl_->declarations);
+  auto& s = *impl_;
+  std::unique_lock<std::mutex> lock(s.mu);
+  // The union of what the live members declare: wait until every one of them has been
+  // heard (each publishes its set, possibly empty, when it joins).
+  auto live = [&] {
+    std::vector<std::string> names;
+    if (s.status) {
+      for (const auto& m : s.status->members()) {
+        if (m.alive()) names.push_back(m.service().to_string());
+      }
+    }
+    return names;
+  };
+  s.WaitUntil(lock, Deadline(wait_s), [&] {
+    if (!s.status) return false;
+    for (const auto& n : live()) {
+      if (!s.declarations.count(n)) return false;
+    }
+    return true;
+  });
+  std::map<std::string, std::vector<msg::BlueprintDeclaration>> current;
+  const auto names = live();
+  for (const auto& [service, list] : s.declarations) {
+    if (!s.status || std::find(names.begin(), names.end(), service) != names.end()) current[service] = list;
+  }
+  return BlueprintLibrary(current);
 }
 
 std::vector<ActorInfo> Client::actors() const {
   std::lock_guard<std::mutex> lock(impl_->mu);
   std::vector<ActorInfo> out;
-  if (impl_->actors_run != impl_->world->run()) return out;
-  for (const auto& [id, a] : impl_->actors) out.push_back(a);
+  for (const auto& [id, a] : impl_->MergedActors()) out.push_back(a);
   return out;
 }
 
 std::optional<ActorInfo> Client::actor(uint32_t id) const {
   std::lock_guard<std::mutex> lock(impl_->mu);
-  if (impl_->actors_run != impl_->world->run()) return std::nullopt;
-  auto it = impl_->actors.find(id);
-  if (it == impl_->actors.end()) return std::nullopt;
+  const auto all = impl_->MergedActors();
+  auto it = all.find(id);
+  if (it == all.end()) return std::nullopt;
   return it->second;
 }
 

@@ -22,7 +22,7 @@ bool SensorTypeOf(const std::string& blueprint, SensorType* type) {
       {"sensor.other.collision", SensorType::kCollision},
       {"sensor.other.lane_invasion", SensorType::kLaneInvasion},
       {"sensor.other.obstacle", SensorType::kObstacle},
-      {"sensor.other.distance", SensorType::kObstacle},
+      {"sensor.other.distance", SensorType::kDistance},
   };
   for (const auto& e : kTable) {
     if (StartsWith(blueprint, e.prefix)) {
@@ -45,6 +45,7 @@ const char* SensorTypeName(SensorType type) {
     case SensorType::kCollision: return "collision";
     case SensorType::kLaneInvasion: return "lane_invasion";
     case SensorType::kObstacle: return "obstacle";
+    case SensorType::kDistance: return "distance";
   }
   return "?";
 }

@@ -127,15 +127,51 @@ std::vector<int> LanesFor(const Road& road, const std::string& orientation,
 }
 }  // namespace
 
-std::vector<TrafficLightInfo> Map::TrafficLights() const {
+namespace {
+// The zone in front of the stop line where a vehicle must react to a signal, like the
+// trigger volume of CARLA's traffic light and stop sign actors: 3 m of lane before the
+// stop line, across every controlled lane, 2 m high, oriented along the first lane.
+BoundingBox TriggerVolumeOf(const std::vector<Waypoint>& stops, const Transform& pole) {
+  BoundingBox box;
+  if (stops.empty()) {
+    box.location = pole.location;
+    box.yaw = pole.yaw;
+    return box;
+  }
+  constexpr double kDepth = 3.0, kHeight = 2.0;
+  const double yaw = stops.front().transform.yaw;
+  const Eigen::Vector2d f(std::cos(yaw), std::sin(yaw)), l(-f.y(), f.x());
+  const Eigen::Vector2d o = stops.front().transform.location.head<2>();
+  double a0 = 1e300, a1 = -1e300, b0 = 1e300, b1 = -1e300, z = 0;
+  for (const Waypoint& w : stops) {
+    const Eigen::Vector2d p = w.transform.location.head<2>() - o;
+    const Eigen::Vector2d wf(std::cos(w.transform.yaw), std::sin(w.transform.yaw)), wl(-wf.y(), wf.x());
+    const Eigen::Vector2d half = 0.5 * w.lane_width * wl, back = p - kDepth * wf;
+    const Eigen::Vector2d corners[] = {p + half, p - half, back + half, back - half};
+    for (const Eigen::Vector2d& c : corners) {
+      a0 = std::min(a0, c.dot(f)); a1 = std::max(a1, c.dot(f));
+      b0 = std::min(b0, c.dot(l)); b1 = std::max(b1, c.dot(l));
+    }
+    z += w.transform.location.z() / static_cast<double>(stops.size());
+  }
+  const Eigen::Vector2d c = o + 0.5 * (a0 + a1) * f + 0.5 * (b0 + b1) * l;
+  box.location = Eigen::Vector3d(c.x(), c.y(), z + 0.5 * kHeight);
+  box.extent = Eigen::Vector3d(0.5 * (a1 - a0), 0.5 * (b1 - b0), 0.5 * kHeight);
+  box.yaw = yaw;
+  return box;
+}
+}  // namespace
+
+std::vector<TrafficLightInfo> Map::ControlledSignals(bool (*selects)(const Signal&)) const {
   std::vector<TrafficLightInfo> out;
   for (std::size_t r = 0; r < data_.roads.size(); ++r) {
     const Road& road = data_.roads[r];
     if (road.sections.empty()) continue;
     for (const Signal& sig : road.signals) {
-      if (!sig.dynamic && sig.type != "1000001") continue;
+      if (!selects(sig)) continue;
       TrafficLightInfo tl;
       tl.signal_id = sig.id;
+      tl.type = sig.type;
       tl.road = static_cast<int>(r);
       tl.s = sig.s;
       tl.t = sig.t;
@@ -184,10 +220,20 @@ std::vector<TrafficLightInfo> Map::TrafficLights() const {
           tl.stop_waypoints.push_back(MakeWaypoint(static_cast<int>(r), section, lane_id, forward ? road.length : 0.0));
         }
       }
+      tl.trigger_volume = TriggerVolumeOf(tl.stop_waypoints, tl.pose);
       out.push_back(std::move(tl));
     }
   }
   return out;
+}
+
+std::vector<TrafficLightInfo> Map::TrafficLights() const {
+  return ControlledSignals([](const Signal& sig) { return sig.dynamic || sig.type == "1000001"; });
+}
+
+std::vector<TrafficLightInfo> Map::StopSigns() const {
+  // OpenDRIVE's German catalogue (which CARLA's towns use): 206 stop, 205 yield.
+  return ControlledSignals([](const Signal& sig) { return !sig.dynamic && (sig.type == "206" || sig.type == "205"); });
 }
 
 namespace {

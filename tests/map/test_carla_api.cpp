@@ -120,6 +120,22 @@ TEST(map_carla_api, UntilLaneEndOnTown01) {
   EXPECT_GT(checked, 100);
 }
 
+// Lane change availability follows the road mark in force at s (CARLA's wp.lane_change):
+// the centre line is solid for 20 m, then broken.
+TEST(map_carla_api, LaneChangeFollowsMarkAlongTheLane) {
+  const std::string lanes =
+      "<laneSection s=\"0\"><left><lane id=\"1\" type=\"driving\">" + Width(3.5) +
+      "</lane></left><center><lane id=\"0\" type=\"none\"><roadMark sOffset=\"20\" type=\"broken\"/>"
+      "<roadMark sOffset=\"0\" type=\"solid\"/></lane></center><right><lane id=\"-1\" type=\"driving\">" +
+      Width(3.5) + "</lane></right></laneSection>";
+  const Map m = WriteAndLoad(Xodr(StraightRoad("m", 0, 40, "", lanes)));
+  const Waypoint solid = *m.WaypointXodr("m", -1, 10), broken = *m.WaypointXodr("m", -1, 30);
+  EXPECT_EQ(m.LeftMarking(solid)->type, RoadMarkType::Solid);
+  EXPECT_EQ(m.LeftMarking(broken)->type, RoadMarkType::Broken);
+  EXPECT_EQ(m.AllowedLaneChange(solid), LaneChange::None);
+  EXPECT_EQ(m.AllowedLaneChange(broken), LaneChange::Left);
+}
+
 TEST(map_carla_api, JunctionObjects) {
   const Map& m = Town("Town01");
   ASSERT_EQ(m.Junctions().size(), m.Data().junctions.size());

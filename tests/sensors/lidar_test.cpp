@@ -26,6 +26,7 @@ TEST(Lidar, RangesToAWallMatchWithinTheNoise) {
                           0, MakePose(0, 0, 1))),
               "");
     size_t points = 0;
+    double error_sq = 0;
     for (int k = 1; k <= 2; ++k) {
       const auto out = w.Step(Frame(k, kDt), kDt);
       ASSERT_EQ(out.point_clouds.size(), 1u);
@@ -35,6 +36,8 @@ TEST(Lidar, RangesToAWallMatchWithinTheNoise) {
         ASSERT_GT(p.x(), 0) << "only the wall ahead can return";
         // Noise moves the point along its ray: x = 12 + dir.x * n, |n| < 5 sigma.
         EXPECT_NEAR(p.x(), 12.0, noise > 0 ? 5 * noise : 1e-3) << "point " << i;
+        const double along = (p.x() - 12.0) / (p.x() / p.norm());  // the noise along the ray
+        error_sq += along * along;
         const double d = std::hypot(12.0, std::hypot(p.y(), p.z() - 0));
         // CARLA: intensity from the distance before the noise.
         if (noise == 0) {
@@ -45,6 +48,7 @@ TEST(Lidar, RangesToAWallMatchWithinTheNoise) {
       }
     }
     EXPECT_GT(points, 500u);
+    EXPECT_NEAR(std::sqrt(error_sq / points), noise, noise > 0 ? 0.1 * noise : 1e-4) << "the noise has noise_stddev";
   }
 }
 
@@ -152,6 +156,19 @@ TEST(Lidar, IntensityDropOffFollowsCarla) {
       EXPECT_NEAR(total / rays, 0.6 * i30 + 0.4, 0.01);
     }
   }
+}
+
+TEST(Lidar, RainAttenuatesReturns) {
+  SensorWorld w(5);
+  w.set_weather(Weather{100.0, 0});
+  w.scene().SetStatic({test::Wall(40)});
+  ASSERT_EQ(w.Add(Spawn(10, "sensor.lidar.ray_cast",
+                        {{"range", "100"}, {"dropoff_general_rate", "0"}, {"upper_fov", "1"}, {"lower_fov", "-1"}, {"horizontal_fov", "20"}})),
+            "");
+  float max_i = 0;
+  const auto pc = w.Step(Frame(1, kDt), kDt).point_clouds.at(0).data;
+  for (size_t i = 0; i < pc.point_count; ++i) max_i = std::max(max_i, pc.Intensity(i));
+  EXPECT_NEAR(max_i, std::exp(-(0.004 + 0.01) * 40), 1e-4);  // full rain adds 0.01 / m
 }
 
 TEST(Lidar, FogAttenuatesReturns) {

@@ -277,5 +277,122 @@ TEST_F(SensorsServiceTest, DeclaresCarlasSensorBlueprintsAndChecksSpawns) {
   EXPECT_FALSE(s.Owns(sp));
 }
 
+// The event sensors without a coordinator: a stand-in "ground_sim" declares vehicles and
+// publishes GroundState and PhysicsEvents; the collision and lane-invasion sensors on car 5
+// deliver car 5's events of the frame, stamped with it, and nothing else.
+TEST(SensorsEvents, CollisionAndLaneInvasionStreamsFromPhysicsEvents) {
+  auto bus = CreateInProcessBus();
+  std::mutex mu;
+  std::vector<msg::CollisionEvent> collisions;
+  std::vector<msg::LaneInvasionEvent> invasions;
+  std::condition_variable cv;
+  Reader<msg::CollisionEvent> cr(*bus, topics::kCollision, [&](const msg::CollisionEvent& e, const SampleInfo&) {
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      collisions.push_back(e);
+    }
+    cv.notify_all();
+  });
+  Reader<msg::LaneInvasionEvent> lr(*bus, topics::kLaneInvasion, [&](const msg::LaneInvasionEvent& e, const SampleInfo&) {
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      invasions.push_back(e);
+    }
+    cv.notify_all();
+  });
+  Writer<msg::BlueprintSet> sets(*bus, topics::kBlueprints);
+  Writer<msg::GroundState> ground(*bus, topics::kGroundState);
+  Writer<msg::PhysicsEvents> physics(*bus, topics::kPhysicsEvents);
+  msg::BlueprintSet set;
+  set.service("ground_sim");
+  msg::BlueprintDeclaration car;
+  car.id("vehicle.lockstep.sedan");
+  car.kind(msg::ActorKind::ACTOR_VEHICLE);
+  set.blueprints({car});
+  sets.Write(set);
+
+  SensorsService service(*bus, "sensors");
+  msg::WorldInfo world;
+  world.run(1);
+  world.seed(3);
+  world.settings(DefaultWorldSettings());
+  world.required_services({msg::ServiceName("ground_sim"), msg::ServiceName("sensors")});
+  msg::BlueprintSet own;
+  own.service("sensors");
+  own.blueprints(service.Blueprints());
+  sets.Write(own);
+  service.BeginRun(world);
+
+  for (uint64_t k = 1; k <= 3; ++k) {
+    msg::FrameStamp stamp;
+    stamp.run(1);
+    stamp.frame(k);
+    stamp.sim_time(0.05 * k);
+    msg::GroundState g;
+    g.stamp(stamp);
+    msg::VehicleState v;
+    v.actor(5);
+    v.blueprint("vehicle.lockstep.sedan");
+    v.transform(MakePose(10, 0, 0.75));
+    g.vehicles({v});
+    ground.Write(g);
+    msg::PhysicsEvents ev;
+    ev.stamp(stamp);
+    ev.service("ground_sim");
+    if (k == 2) {
+      msg::ActorCollision hit, other;
+      hit.actor(5);
+      hit.other_actor(9);
+      hit.other_kind(msg::ObjectKind::OBJECT_VEHICLE);
+      hit.normal_impulse().x(250);
+      other.actor(9);
+      other.other_actor(5);
+      ev.collisions({hit, other});
+      msg::ActorLaneInvasion inv;
+      inv.actor(5);
+      msg::LaneMarking m;
+      m.type(msg::LaneMarkingType::MARKING_SOLID);
+      m.color("white");
+      inv.crossed({m});
+      ev.lane_invasions({inv});
+    }
+    physics.Write(ev);
+    msg::Tick tick;
+    tick.run(1);
+    tick.frame(k);
+    tick.sim_time(0.05 * k);
+    tick.dt(0.05);
+    if (k == 1) {
+      std::vector<msg::Command> cmds;
+      uint32_t id = 100;
+      for (const char* bp : {"sensor.other.collision", "sensor.other.lane_invasion"}) {
+        msg::CommandBody b = SpawnBody(bp, MakePose(0, 0, 0), {}, 5);
+        b.spawn_actor().actor(id++);
+        b.spawn_actor().owner("sensors");
+        msg::Command c;
+        c.body(b);
+        cmds.push_back(c);
+      }
+      tick.commands(cmds);
+    }
+    service.Step(tick);
+  }
+  std::unique_lock<std::mutex> lock(mu);
+  // Delivery to this test's readers may lag the Step that wrote them.
+  cv.wait_for(lock, 10s, [&] { return !collisions.empty() && !invasions.empty(); });
+  ASSERT_EQ(collisions.size(), 1u);
+  EXPECT_EQ(collisions[0].sensor(), 100u);
+  EXPECT_EQ(collisions[0].stamp().frame(), 2u);
+  EXPECT_EQ(collisions[0].actor(), 5u);
+  EXPECT_EQ(collisions[0].other_actor(), 9u);
+  EXPECT_EQ(collisions[0].other_kind(), msg::ObjectKind::OBJECT_VEHICLE);
+  EXPECT_DOUBLE_EQ(collisions[0].normal_impulse().x(), 250);
+  ASSERT_EQ(invasions.size(), 1u);
+  EXPECT_EQ(invasions[0].sensor(), 101u);
+  EXPECT_EQ(invasions[0].stamp().frame(), 2u);
+  ASSERT_EQ(invasions[0].crossed().size(), 1u);
+  EXPECT_EQ(invasions[0].crossed()[0].color().to_string(), "white");
+}
+
 }  // namespace
 }  // namespace lockstep

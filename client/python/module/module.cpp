@@ -281,6 +281,14 @@ py::dict SampleFields(const SensorSample& s) {
       d["crossed"] = crossed;
       break;
     }
+    case SensorType::kDistance: {
+      const auto& m = s.As<msg::DistanceMeasurement>();
+      d["transform"] = PoseToTuple(m.sensor_pose());
+      d["distance"] = m.distance();
+      d["min_distance"] = m.min_distance();
+      d["max_distance"] = m.max_distance();
+      break;
+    }
     case SensorType::kObstacle: {
       const auto& m = s.As<msg::ObstacleDetection>();
       d["actor"] = m.actor();

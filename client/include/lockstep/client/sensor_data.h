@@ -21,6 +21,7 @@ enum class SensorType {
   kCollision,     // event sensors: a sample only when something happens
   kLaneInvasion,
   kObstacle,
+  kDistance,     // lockstep/sensor/distance (AirSim's distance sensor)
 };
 
 // Which topic a sensor blueprint publishes on; false if `blueprint` is not a sensor we know.

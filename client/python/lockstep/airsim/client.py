@@ -465,11 +465,12 @@ class MultirotorClient:
         return out
 
     def getDistanceSensorData(self, distance_sensor_name='', vehicle_name=''):
-        s = self._sensors.latest('getDistanceSensorData', self._drone(vehicle_name), 'sensor.other.obstacle',
+        s = self._sensors.latest('getDistanceSensorData', self._drone(vehicle_name), 'sensor.other.distance',
                                  distance_sensor_name)
+        f = s.fields()
         out = DistanceSensorData()
         out.time_stamp = int(s.sim_time * 1e9)
-        out.distance = s.fields()['distance']
+        out.distance, out.min_distance, out.max_distance = f['distance'], f['min_distance'], f['max_distance']
         return out
 
     def getLidarData(self, lidar_name='', vehicle_name=''):

@@ -32,22 +32,31 @@ struct LanePoint {
   double s = 0, t = 0;
 };
 
+// A box in the world frame, like carla.BoundingBox: centre, half sizes along its own
+// axes, turned by `yaw` about z (0 for junction boxes, which are axis-aligned).
+struct BoundingBox {
+  Eigen::Vector3d location = Eigen::Vector3d::Zero();  // centre (m, ENU)
+  Eigen::Vector3d extent = Eigen::Vector3d::Zero();    // half sizes along its x, y, z (m)
+  double yaw = 0;                                      // (rad, CCW from +x)
+  // Whether a world point lies inside (or on) the box.
+  bool Contains(const Eigen::Vector3d& p) const;
+};
+
 // A traffic light (dynamic signal) with the lanes it controls, like CARLA's
-// carla.TrafficLight get_stop_waypoints() / get_affected_lane_waypoints().
+// carla.TrafficLight get_stop_waypoints() / get_affected_lane_waypoints(). Stop and
+// yield signs (Map::StopSigns) use the same record.
 struct TrafficLightInfo {
   std::string signal_id;
+  std::string type;              // OpenDRIVE signal type: "1000001", "206" (stop), "205" (yield), ...
   int road = -1;                 // road index the signal is placed on
   double s = 0, t = 0;           // its road coordinates (m)
   Transform pose;                // pole foot, yaw facing the traffic it controls
   int junction = -1;             // junction the controlled lanes drive into (-1: none)
   std::string controller_id;     // <controller> that groups it with others ("" if none)
   std::vector<Waypoint> stop_waypoints;  // one per controlled lane, at the lane's end (stop line)
-};
-
-// Axis-aligned box in the world frame, like carla.BoundingBox with zero rotation.
-struct BoundingBox {
-  Eigen::Vector3d location = Eigen::Vector3d::Zero();  // centre (m, ENU)
-  Eigen::Vector3d extent = Eigen::Vector3d::Zero();    // half sizes along x, y, z (m)
+  // Where an approaching vehicle must react (CARLA's trigger volume): 3 m of lane before
+  // the stop line across all controlled lanes, 2 m high, turned along the first lane.
+  BoundingBox trigger_volume;
 };
 
 // A junction, like carla.Junction. Its (entry, exit) waypoint pairs come from
@@ -58,6 +67,20 @@ struct JunctionInfo {
   // Bounds of the lane centres of every lane (any type) of its connecting roads, as
   // CARLA computes carla.Junction.bounding_box.
   BoundingBox bounding_box;
+};
+
+// A signal (or a reference to one) found along a lane, like carla.Landmark from
+// waypoint.get_landmarks(distance).
+struct Landmark {
+  std::string id;           // the signal's id (a <signalReference> gives its target's)
+  std::string name, type, subtype, unit, text;  // the signal's attributes, as written
+  double value = 0;         // the signal's value (NaN when absent)
+  bool dynamic = false;     // traffic lights are dynamic
+  int road = -1;            // road index where it was met (the reference's road for references)
+  double s = 0, t = 0;      // its road coordinates there (m)
+  Transform pose;           // the signal itself: pole foot, yaw facing its traffic
+  double distance = 0;      // along the lane from the query waypoint (m)
+  Waypoint waypoint;        // on the query's lane (or the branch taken) level with it
 };
 
 class SegmentIndex;  // spatial index over lane-centre segments (map_queries.cpp)
@@ -153,6 +176,21 @@ class Map {
   // which also holds for RoadRunner exports whose `orientation` is inverted; `orientation`
   // decides only for t = 0. <validity> narrows the lanes.
   std::vector<TrafficLightInfo> TrafficLights() const;
+  // Every stop (type 206) and yield (205) sign with the lanes it controls, found the
+  // same way as for traffic lights; TrafficLightInfo::type tells them apart.
+  std::vector<TrafficLightInfo> StopSigns() const;
+
+  // Signals and signal references that apply to the lane ahead of `wp` within
+  // `distance` metres along the lane graph (every branch), nearest first, each once
+  // (waypoint.get_landmarks(distance, stop_at_junction)). A signal applies to a lane
+  // its <validity> names, else to the lanes of its orientation ("+": lanes driving with
+  // s, "-": against, other: both). With stop_at_junction the walk ends at a junction.
+  std::vector<Landmark> LandmarksAhead(const Waypoint& wp, double distance, bool stop_at_junction = false) const;
+  // Crosswalk zones (objects of type "crosswalk") as closed polygons in the world frame,
+  // the first corner repeated last; CARLA's map.get_crosswalks() returns the same
+  // polygons one after another in a single list. Objects without an outline give their
+  // length x width rectangle.
+  std::vector<std::vector<Eigen::Vector3d>> Crosswalks() const;
 
   // Axis-aligned bounds of all roads (m).
   Eigen::Vector2d BoundsMin() const { return bounds_min_; }
@@ -163,6 +201,7 @@ class Map {
   void BuildJunctions();
   void LinkRoadEnd(int node_id, bool at_end);
   std::vector<Waypoint> UntilRoadEnd(const Waypoint& wp, double distance, bool forward) const;
+  std::vector<TrafficLightInfo> ControlledSignals(bool (*selects)(const Signal&)) const;
   static constexpr int kWalkBudget = 20000;  // lane nodes visited by one Next/Previous at most
   std::vector<Waypoint> Walk(const Waypoint& wp, double distance, bool forward, int* budget) const;
   std::optional<Waypoint> Neighbour(const Waypoint& wp, int lane) const;

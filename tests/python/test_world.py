@@ -1,0 +1,230 @@
+"""carla and airsim calls against a running simulation: ticks, settings, blueprints from
+the services' declarations, spawn errors with the service's reason, maps, drones, and
+sensors in synchronous mode delivering every frame once and in order."""
+import math
+import os
+
+import numpy as np
+import pytest
+
+import airsim
+import carla
+import lockstep
+
+from conftest import has_service
+
+
+@pytest.fixture(scope='module')
+def world(sim):
+    client = carla.Client('localhost', 2000)
+    client.set_timeout(30)
+    w = client.get_world()
+    s = w.get_settings()
+    assert s.synchronous_mode
+    return w
+
+
+def test_tick_returns_consecutive_frames(world):
+    frames = [world.tick() for _ in range(10)]
+    assert frames == list(range(frames[0], frames[0] + 10))
+    snap = world.get_snapshot()
+    assert snap.frame == frames[-1]
+    assert snap.timestamp.delta_seconds == pytest.approx(0.05)
+    assert snap.timestamp.elapsed_seconds == pytest.approx(frames[-1] * 0.05)
+
+
+def test_settings_round_trip(world):
+    s = world.get_settings()
+    s.fixed_delta_seconds = 0.02
+    world.apply_settings(s)
+    assert world.get_settings().fixed_delta_seconds == pytest.approx(0.02)
+    s.fixed_delta_seconds = 0.05
+    world.apply_settings(s)
+    bad = world.get_settings()
+    bad.fixed_delta_seconds = 5.0
+    with pytest.raises(lockstep.CommandRejected, match='fixed_delta_seconds'):
+        world.apply_settings(bad)
+
+
+def test_blueprint_library_comes_from_the_services(world):
+    lib = world.get_blueprint_library()
+    drones = lib.filter('drone.*')
+    assert len(drones) >= 1  # declared by air_sim
+    bp = lib.find('drone.generic_quad')
+    assert bp.has_attribute('role_name')
+    with pytest.raises(IndexError, match='not found'):
+        lib.find('vehicle.nobody.declares')
+    with pytest.raises(IndexError, match='no attribute'):
+        bp.get_attribute('no_such_attribute')
+
+
+def test_bad_calls_raise_with_the_services_reason(world):
+    t = carla.Transform(carla.Location(47.75, -1.75, 0.2))
+    lib = world.get_blueprint_library()
+    bp = lib.find('drone.generic_quad')
+    # Unknown blueprint and unknown attribute: the coordinator's reason reaches Python.
+    with pytest.raises(lockstep.CommandRejected, match='unknown blueprint') as e:
+        world._client.spawn('vehicle.does_not.exist', (0, 0, 0, 1, 0, 0, 0))
+    assert 'vehicle.does_not.exist' in e.value.reason
+    with pytest.raises(lockstep.CommandRejected, match='no_such_attribute'):
+        world._client.spawn('drone.generic_quad', (0, 0, 0, 1, 0, 0, 0), {'no_such_attribute': '1'})
+    # A bad attribute value is refused by set_attribute, like CARLA.
+    numeric = [a for a in bp if a.type in ('float', 'int') and a.is_modifiable and math.isfinite(a._decl['max'])]
+    if numeric:
+        with pytest.raises(IndexError, match=numeric[0].id):
+            bp.set_attribute(numeric[0].id, str(numeric[0]._decl['max'] + 1000))
+        with pytest.raises(ValueError, match=numeric[0].id):
+            bp.set_attribute(numeric[0].id, 'abc')
+    # A destroyed actor.
+    drone = world.spawn_actor(bp, t)
+    world.tick()
+    assert drone.is_alive
+    assert drone.destroy()
+    world.tick()
+    assert not drone.is_alive
+    with pytest.raises(lockstep.CommandRejected, match='unknown actor') as e:
+        world._client.destroy(drone.id)
+    assert 'unknown actor' in e.value.reason
+    with pytest.raises(lockstep.CommandRejected, match='unknown actor'):
+        drone.set_transform(t)
+
+
+def test_nan_control_is_rejected(world):
+    if has_service('ground_sim'):
+        lib = world.get_blueprint_library()
+        car = world.spawn_actor(lib.filter('vehicle.*')[0], world.get_map().get_spawn_points()[5])
+        try:
+            with pytest.raises(lockstep.CommandRejected, match='NaN'):
+                car.apply_control(carla.VehicleControl(throttle=float('nan')))
+        finally:
+            car.destroy()
+    bp = world.get_blueprint_library().find('drone.generic_quad')
+    bp.set_attribute('role_name', 'nan_test')
+    drone = world.spawn_actor(bp, carla.Transform(carla.Location(43.25, 1.75, 0.2)))
+    world.tick()
+    try:
+        c = airsim.MultirotorClient()
+        c.enableApiControl(True, 'nan_test')
+        with pytest.raises(lockstep.CommandRejected, match='NaN'):
+            c.moveToPositionAsync(float('nan'), 0, -3, 2, vehicle_name='nan_test')
+    finally:
+        drone.destroy()
+
+
+def test_map_and_waypoints(world):
+    m = world.get_map()
+    assert m.name == 'LockstepTown1'
+    points = m.get_spawn_points()
+    assert len(points) > 10
+    wp = m.get_waypoint(points[0].location)
+    assert wp.lane_type == carla.LaneType.Driving
+    assert wp.transform.location.distance(points[0].location) < 3.0
+    nxt = wp.next(5.0)
+    assert nxt and all(abs(n.transform.location.distance(wp.transform.location) - 5.0) < 1.0 for n in nxt)
+    assert len(m.get_topology()) > 0
+    with pytest.raises(carla.LockstepUnsupported, match='Map.to_opendrive'):
+        m.to_opendrive()
+
+
+def test_weather(world):
+    world.set_weather(carla.WeatherParameters.WetCloudyNoon)
+    assert world.get_weather().precipitation_deposits == 50
+    with pytest.raises(lockstep.CommandRejected, match='cloudiness'):
+        world.set_weather(carla.WeatherParameters(cloudiness=500))
+    world.set_weather(carla.WeatherParameters.ClearNoon)
+
+
+def test_unsupported_calls_name_themselves(world):
+    with pytest.raises(carla.LockstepUnsupported, match='World.cast_ray'):
+        world.cast_ray(carla.Location(), carla.Location(1, 0, 0))
+    with pytest.raises(carla.LockstepUnsupported, match='DebugHelper.draw_point'):
+        world.debug.draw_point(carla.Location())
+
+
+def test_airsim_drone_flies_in_ned_from_its_spawn(world):
+    bp = world.get_blueprint_library().find('drone.generic_quad')
+    bp.set_attribute('role_name', 'ned')
+    start = carla.Transform(carla.Location(47.75, -1.75, 0.2))
+    drone = world.spawn_actor(bp, start)
+    world.tick()
+    try:
+        c = airsim.MultirotorClient()
+        assert 'ned' in c.listVehicles()
+        with pytest.raises(lockstep.ClientError, match='API control'):
+            c.takeoffAsync(vehicle_name='ned')
+        c.enableApiControl(True, 'ned')
+        assert c.armDisarm(True, 'ned')
+        assert c.takeoffAsync(vehicle_name='ned').join()
+        # Along the road (east), clear of the town's buildings and trees.
+        assert c.moveToPositionAsync(0.5, 10, -6, 3, vehicle_name='ned').join()
+        p = c.getMultirotorState(vehicle_name='ned').kinematics_estimated.position
+        assert (p.x_val, p.y_val, p.z_val) == (pytest.approx(0.5, abs=0.5), pytest.approx(10, abs=0.5),
+                                               pytest.approx(-6, abs=0.5))
+        # The same place through the carla API: x east = start.x + 10, carla y = start.y - 0.5 (north is -y).
+        loc = drone.get_location()
+        assert (loc.x, loc.y, loc.z) == (pytest.approx(57.75, abs=0.5), pytest.approx(-2.25, abs=0.5),
+                                         pytest.approx(6.2, abs=0.5))
+        frame = c._client.frame()
+        c.simContinueForFrames(7)
+        assert c._client.frame() == frame + 7
+        assert c.simIsPause()
+    finally:
+        drone.destroy()
+
+
+def _per_frame_sensors(world):
+    lib = world.get_blueprint_library()
+    wanted = ['sensor.camera.rgb', 'sensor.camera.depth', 'sensor.lidar.ray_cast', 'sensor.other.imu',
+              'sensor.other.gnss', 'sensor.camera.semantic_segmentation', 'sensor.other.barometer']
+    have = [w for w in wanted if len(lib.filter(w))]
+    out = []
+    while len(out) < 6:
+        out.append(have[len(out) % len(have)])
+    return out
+
+
+def test_six_sensors_over_500_ticks_deliver_every_frame_once_and_in_order(world, tmp_path):
+    names = _per_frame_sensors(world)
+    lib = world.get_blueprint_library()
+    base = carla.Transform(carla.Location(47.75, -1.75, 2.0))
+    sensors, seen = [], {}
+    for i, name in enumerate(names):
+        bp = lib.find(name)
+        if bp.has_attribute('image_size_x'):
+            bp.set_attribute('image_size_x', '64')
+            bp.set_attribute('image_size_y', '48')
+        s = world.spawn_actor(bp, carla.Transform(base.location + carla.Location(x=i)))
+        sensors.append(s)
+        seen[s.id] = []
+    world.tick()  # the spawn frame
+    images = []
+
+    def make_cb(sid):
+        def cb(data):
+            seen[sid].append(data.frame)
+            if isinstance(data, carla.Image) and len(images) < 2:
+                images.append(data)
+        return cb
+
+    for s in sensors:
+        s.listen(make_cb(s.id))
+    try:
+        first = None
+        for _ in range(500):
+            k = world.tick()
+            first = first or k
+            for s in sensors:
+                assert seen[s.id] and seen[s.id][-1] == k, '%s: frame %d missing at tick return' % (s.type_id, k)
+        for s in sensors:
+            assert seen[s.id] == list(range(first, first + 500)), s.type_id
+        if images:
+            img = images[0]
+            a = img.to_numpy()
+            assert a.shape[:2] == (img.height, img.width)
+            assert not a.flags.writeable and a.base is not None  # a view of the received sample
+            path = img.save_to_disk(str(tmp_path / '%06d.png'))
+            assert os.path.getsize(path) > 0
+    finally:
+        for s in sensors:
+            s.stop()
+            s.destroy()

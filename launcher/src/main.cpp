@@ -19,6 +19,7 @@
 #include "lockstep/runtime/error.h"
 #include "lockstep/runtime/launch_config.h"
 #include "lockstep/runtime/log.h"
+#include "lockstep/runtime/shm_sweep.h"
 #include "supervisor.h"
 
 namespace {
@@ -28,7 +29,17 @@ void OnSignal(int) { g_stop = true; }
 
 std::string BinDir() { return std::filesystem::canonical("/proc/self/exe").parent_path().string(); }
 
+// Frees what earlier runs killed with SIGKILL left in /dev/shm; says so when it did.
+void SweepShm(bool quiet) {
+  const auto r = lockstep::runtime::SweepStaleShm();
+  if (!quiet || r.removed_files > 0)
+    std::printf("lockstep: removed %d stale Fast DDS shared-memory file(s), %.1f MiB\n", r.removed_files,
+                static_cast<double>(r.removed_bytes) / (1 << 20));
+  std::fflush(stdout);
+}
+
 int Up(const std::string& config_file, int domain) {
+  SweepShm(true);
   lockstep::LaunchConfig config = lockstep::LoadLaunchConfig(config_file);
   if (domain >= 0) config.domain_id = domain;
   const std::string bin = BinDir();
@@ -69,7 +80,9 @@ int Up(const std::string& config_file, int domain) {
     return std::nullopt;
   };
   lockstep::Supervisor supervisor(std::move(children), hung);
-  return supervisor.Run(g_stop);
+  const int rc = supervisor.Run(g_stop);
+  SweepShm(true);  // what a hung service killed with SIGKILL left behind
+  return rc;
 }
 
 int Status(int domain, const std::string& profile, double wait_s, bool json) {
@@ -153,6 +166,9 @@ int main(int argc, char** argv) {
   auto* map = app.add_subcommand("map", "map tools (see lockstep-map --help)");
   map->prefix_command();
 
+  auto* clean_shm = app.add_subcommand(
+      "clean-shm", "remove the shared-memory files of Fast DDS participants that died without cleaning up");
+
   auto* python = app.add_subcommand("python", "run a Python script with the lockstep, carla and airsim packages");
   python->prefix_command();
 
@@ -184,6 +200,10 @@ int main(int argc, char** argv) {
       execv(tool.c_str(), args.data());
       std::fprintf(stderr, "lockstep map: cannot run %s\n", tool.c_str());
       return 127;
+    }
+    if (*clean_shm) {
+      SweepShm(false);
+      return 0;
     }
     if (*python) return RunPython(python->remaining());
   } catch (const std::exception& e) {

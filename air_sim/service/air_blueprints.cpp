@@ -37,6 +37,16 @@ std::vector<msg::AttributeDeclaration> DroneAttributes(const std::string& frame)
     void operator()(const char*, air::FrameType&) const {
       out->push_back(blueprint::String("frame", frame, {"quad_x", "quad_plus", "hexa_x"}, true));
     }
+    // Model choices: AirSim's by default, Lockstep's earlier models as options (docs/air.md).
+    void operator()(const char* key, air::DragModel& m) const {
+      out->push_back(blueprint::String(key, air::ToString(m), {"airsim", "faces"}, true));
+    }
+    void operator()(const char* key, air::GainModel& m) const {
+      out->push_back(blueprint::String(key, air::ToString(m), {"airsim", "physical"}, true));
+    }
+    void operator()(const char* key, air::LandingModel& m) const {
+      out->push_back(blueprint::String(key, air::ToString(m), {"ground_lock", "impulse"}, true));
+    }
   };
   air::VisitParams(p, Visitor{&v, frame});
   return v;

@@ -1,5 +1,6 @@
 #include "air_service.h"
 
+#include <algorithm>
 #include <sstream>
 
 #include "lockstep/map/map.h"
@@ -60,7 +61,11 @@ msg::ObjectKind ToWire(air::ObjectKind k) {
   }
   return msg::ObjectKind::OBJECT_NONE;
 }
-bool IsDroneBlueprint(const std::string& bp) { return bp.rfind("drone.", 0) == 0; }
+
+// AirSim's adaptive lookahead factor: 0 on the wire = AirSim's default 1, < 0 = off.
+double AdaptiveLookahead(const msg::DroneCommand& d) {
+  return d.adaptive_lookahead() == 0 ? 1.0 : std::max(0.0, d.adaptive_lookahead());
+}
 
 // The fields move-to-position and move-on-path share.
 template <class Move>
@@ -71,6 +76,7 @@ Move PathMove(const msg::DroneCommand& d) {
   m.drivetrain = Drive(d.drivetrain());
   m.yaw_mode = Yaw(d.yaw());
   m.lookahead = d.lookahead() > 0 ? d.lookahead() : -1;
+  m.adaptive_lookahead = AdaptiveLookahead(d);
   return m;
 }
 
@@ -91,7 +97,42 @@ std::optional<air::CommandBody> ToAirCommand(const msg::DroneCommand& d, std::st
     case K::DRONE_LAND: return air::cmd::Land{d.timeout() > 0 ? d.timeout() : 60.0};
     case K::DRONE_HOVER:
     case K::DRONE_CANCEL: return air::cmd::Hover{};
-    case K::DRONE_GO_HOME: return air::cmd::GoHome{d.velocity(), Timeout(d.timeout())};
+    case K::DRONE_GO_HOME: return air::cmd::GoHome{d.velocity() > 0 ? d.velocity() : 0.5, Timeout(d.timeout())};
+    case K::DRONE_MOVE_TO_Z: {
+      air::cmd::MoveToZ m;
+      m.z = d.target().z();
+      m.velocity = d.velocity();
+      m.timeout = Timeout(d.timeout());
+      m.yaw_mode = Yaw(d.yaw());
+      m.lookahead = d.lookahead() > 0 ? d.lookahead() : -1;
+      m.adaptive_lookahead = AdaptiveLookahead(d);
+      return m;
+    }
+    case K::DRONE_MOVE_BY_ROLL_PITCH_YAWRATE_THROTTLE:
+      if (!need(4)) return std::nullopt;
+      return air::cmd::MoveByRollPitchYawrateThrottle{v[0], v[1], v[2], v[3], d.duration()};
+    case K::DRONE_MOVE_BY_ROLL_PITCH_YAWRATE_Z:
+      if (!need(4)) return std::nullopt;
+      return air::cmd::MoveByRollPitchYawrateZ{v[0], v[1], v[2], v[3], d.duration()};
+    case K::DRONE_MOVE_BY_ANGLE_RATES_Z:
+      if (!need(4)) return std::nullopt;
+      return air::cmd::MoveByAngleRatesZ{air::Vec3(v[0], v[1], v[2]), v[3], d.duration()};
+    case K::DRONE_SET_KINEMATICS: {
+      if (v.size() != 4 && v.size() != 7 && v.size() != 10) {
+        *why = "set_kinematics needs 4, 7 or 10 values, got " + std::to_string(v.size());
+        return std::nullopt;
+      }
+      air::cmd::SetKinematics k;
+      k.pose.position = ToVec(d.target());
+      k.pose.orientation = air::Quat(v[0], v[1], v[2], v[3]);
+      if (v.size() >= 7) k.velocity = air::Vec3(v[4], v[5], v[6]);
+      if (v.size() >= 10) k.angular_velocity = air::Vec3(v[7], v[8], v[9]);
+      return k;
+    }
+    case K::DRONE_MOVE_TO_GPS:
+    case K::DRONE_SET_WIND:
+      *why = "mapped by the service (needs the map's geo-reference / applies to every drone)";
+      return std::nullopt;
     case K::DRONE_MOVE_TO_POSITION: {
       auto m = PathMove<air::cmd::MoveToPosition>(d);
       m.position = ToVec(d.target());
@@ -154,6 +195,8 @@ AirService::AirService(Bus& bus, std::string name)
       state_writer_(bus, topics::kAirState),
       event_writer_(bus, topics::kEvent),
       ground_(bus, topics::kGroundState),
+      declarations_(bus),
+      physics_writer_(bus, topics::kPhysicsEvents),
       map_reader_(bus, topics::kMap, [this](const msg::MapData& m, const SampleInfo&) {
         {
           std::lock_guard<std::mutex> lock(map_mu_);
@@ -168,6 +211,7 @@ void AirService::LoadTown(const msg::WorldInfo& world) {
   if (world.map_name().to_string().empty()) {
     town_mesh_.reset();
     town_hash_ = 0;
+    geo_ = air::GeoReference{};
     return;
   }
   if (world.map_hash() == town_hash_ && town_mesh_) return;  // same map as before: reuse
@@ -179,6 +223,7 @@ void AirService::LoadTown(const msg::WorldInfo& world) {
   }
   if (!data) throw InputError("air_sim: no map '" + world.map_name().to_string() + "' from the coordinator within 30 s");
   const map::Map town = map::Map::FromString(data->opendrive(), data->name().to_string());
+  geo_ = air::ParseGeoReference(town.Data().header.geo_reference);
   const map::Scene scene = data->scene().empty() ? map::GenerateScene(town, world.seed())
                                                  : map::SceneFromYaml(data->scene(), data->name().to_string() + ".scene.yaml");
   std::vector<float> xyz;
@@ -203,12 +248,24 @@ void AirService::BeginRun(const msg::WorldInfo& world) {
   state_ = air::MakeState(model_);
   blueprints_.clear();
   last_command_.clear();
-  wait_for_ground_ = false;
-  for (const auto& s : world.required_services()) {
-    if (s.to_string() == "ground_sim") wait_for_ground_ = true;
+  api_wind_.setZero();
+  wind_intensity_ = world.weather().wind_intensity();
+  input_timeout_s_ = world.settings().service_timeout() > 0 ? world.settings().service_timeout() : 10.0;
+  // Whose GroundState to wait for: the members that declare vehicles or walkers. Every member
+  // publishes its set when it joins, before the coordinator counts it alive.
+  std::vector<std::string> others;
+  for (const std::string& s : RequiredServices(world)) {
+    if (s != name_) others.push_back(s);
   }
+  if (!declarations_.WaitFor(others, std::chrono::seconds(30))) {
+    throw InputError(name_ + ": the blueprint declarations of the run's services did not arrive within 30 s");
+  }
+  std::vector<std::string> ground = declarations_.Declaring(msg::ActorKind::ACTOR_VEHICLE, others);
+  for (const std::string& s : declarations_.Declaring(msg::ActorKind::ACTOR_WALKER, others)) ground.push_back(s);
+  wait_for_ground_ = !ground.empty();
   spdlog::info("run {}: seed {}, vehicles {}", world.run(), world.seed(),
-               wait_for_ground_ ? "from ground_sim (frame k-1)" : "none (no ground_sim in the run)");
+               wait_for_ground_ ? "from " + ground.front() + "'s GroundState (frame k-1)"
+                                : std::string("none (no member declares vehicles or walkers)"));
 }
 
 void AirService::Fail(const msg::FrameStamp& stamp, uint32_t actor, const std::string& why) {
@@ -231,7 +288,7 @@ void AirService::Apply(const msg::Command& c, uint64_t frame, air::Commands* out
     case msg::CommandKind::CMD_SPAWN_ACTOR: {
       const auto& s = b.spawn_actor();
       const std::string bp = s.blueprint().to_string();
-      if (!IsDroneBlueprint(bp)) return;
+      if (s.owner().to_string() != name_) return;  // the coordinator names who simulates it
       std::map<std::string, std::string> attrs;
       for (const auto& a : s.attributes()) {
         if (a.key().to_string() != "role_name") attrs[a.key().to_string()] = a.value().to_string();
@@ -257,12 +314,33 @@ void AirService::Apply(const msg::Command& c, uint64_t frame, air::Commands* out
         out->push_back(air::Command{0, b.set_transform().actor(), air::cmd::SetPose{ToPose(b.set_transform().transform())}});
       }
       return;
+    case msg::CommandKind::CMD_SET_WEATHER:
+      wind_intensity_ = b.weather().wind_intensity();
+      return;
     case msg::CommandKind::CMD_DRONE: {
       const auto& d = b.drone();
       if (!model_.Find(d.actor())) return;  // coordinator checked the id; a failed spawn leaves it unknown
       std::string why;
       std::optional<air::CommandBody> body;
-      if (d.kind() == msg::DroneCommandKind::DRONE_SET_GAINS) {
+      if (d.kind() == msg::DroneCommandKind::DRONE_SET_WIND) {
+        // simSetWind: one wind for every drone, from the next step on; completes at once.
+        api_wind_ = ToVec(d.target());
+        last_command_[d.actor()] = {d.command_id(), msg::DroneCommandStatus::DRONE_CMD_COMPLETED};
+        return;
+      }
+      if (d.kind() == msg::DroneCommandKind::DRONE_MOVE_TO_GPS) {
+        // AirSim moveToGPS: the geodetic goal through the map's geo-reference, then a move.
+        const auto& v = d.values();
+        air::cmd::MoveToPosition m;
+        m.position = air::FromGeo(geo_, air::GeoPoint{v.size() > 0 ? v[0] : 0, v.size() > 1 ? v[1] : 0, v.size() > 2 ? v[2] : 0});
+        m.velocity = d.velocity();
+        m.timeout = Timeout(d.timeout());
+        m.drivetrain = Drive(d.drivetrain());
+        m.yaw_mode = Yaw(d.yaw());
+        m.lookahead = d.lookahead() > 0 ? d.lookahead() : -1;
+        m.adaptive_lookahead = AdaptiveLookahead(d);
+        body = m;
+      } else if (d.kind() == msg::DroneCommandKind::DRONE_SET_GAINS) {
         air::ControllerGains g = state_.Find(d.actor())->controller.gains;
         const auto& w = d.gains();
         switch (d.gains_loop()) {
@@ -300,14 +378,16 @@ void AirService::Apply(const msg::Command& c, uint64_t frame, air::Commands* out
   }
 }
 
-air::Environment AirService::Environment(const msg::Tick& tick) {
-  air::Environment env;
-  if (!wait_for_ground_ || tick.frame() < 2) return env;
-  // Jacobi coupling: the vehicles of frame k-1 while stepping to frame k.
-  auto ground = ground_.WaitFor(tick.run(), tick.frame() - 1, std::chrono::seconds(10));
+std::vector<air::VehicleBox> AirService::Vehicles(const msg::Tick& tick) {
+  std::vector<air::VehicleBox> out;
+  if (!wait_for_ground_ || tick.frame() < 2) return out;
+  // Jacobi coupling: the vehicles of frame k-1 while stepping to frame k. Never step without
+  // them: a missing input faults the run (the coordinator restarts or reports it).
+  const auto timeout = std::chrono::milliseconds(static_cast<int64_t>(input_timeout_s_ * 1000));
+  auto ground = ground_.WaitFor(tick.run(), tick.frame() - 1, timeout);
   if (!ground) {
-    spdlog::error("no GroundState of frame {} within 10 s: stepping without vehicles", tick.frame() - 1);
-    return env;
+    throw InputError(name_ + ": no GroundState of frame " + std::to_string(tick.frame() - 1) + " within " +
+                     std::to_string(input_timeout_s_) + " s; a missing input faults the run");
   }
   for (const auto& v : ground->vehicles()) {
     air::VehicleBox box;
@@ -316,16 +396,28 @@ air::Environment AirService::Environment(const msg::Tick& tick) {
     box.velocity = ToVec(v.velocity());
     box.angular_velocity = ToVec(v.angular_velocity());
     box.half_extents = ToVec(v.half_extents());
-    env.vehicles.push_back(box);
+    out.push_back(box);
   }
+  return out;
+}
+
+// Weather wind_intensity (0..100) as a mean wind of intensity / 10 m/s towards +x (east; CARLA
+// gives no direction) with gusts of 30 % of it; simSetWind's wind adds to it.
+air::Environment AirService::Environment(std::vector<air::VehicleBox> vehicles) const {
+  air::Environment env;
+  const double weather_wind = std::clamp(static_cast<double>(wind_intensity_), 0.0, 100.0) / 10.0;
+  env.wind = api_wind_ + air::Vec3(weather_wind, 0, 0);
+  env.turbulence_sigma = 0.3 * weather_wind;
+  env.vehicles = std::move(vehicles);
   return env;
 }
 
 void AirService::Step(const msg::Tick& tick) {
   pending_events_.clear();
+  std::vector<air::VehicleBox> vehicles = Vehicles(tick);  // first: a fault leaves the state as it was
   air::Commands commands;
   for (const auto& c : tick.commands()) Apply(c, tick.frame(), &commands);
-  air::Step(model_, &state_, commands, Environment(tick), tick.dt());
+  air::Step(model_, &state_, commands, Environment(std::move(vehicles)), tick.dt());
   if (replaying()) return;  // a replacement rebuilding past frames: they were published already
   msg::FrameStamp stamp;
   stamp.run(tick.run());
@@ -350,7 +442,30 @@ void AirService::Step(const msg::Tick& tick) {
     e.stamp(stamp);
     event_writer_.Write(e);
   }
+  PublishPhysicsEvents(stamp);
   state_writer_.Write(Publish(stamp));
+}
+
+// Every tick, also when empty: the drones' collision onsets of this frame, for the sensors
+// service's collision sensor. Impulse: the one that stops the approach, m v_n along the normal.
+void AirService::PublishPhysicsEvents(const msg::FrameStamp& stamp) {
+  msg::PhysicsEvents out;
+  out.stamp(stamp);
+  out.service(name_);
+  std::vector<msg::ActorCollision> collisions;
+  for (const auto& e : state_.events) {
+    if (e.kind != air::EventKind::kCollision) continue;
+    const air::DroneModel* dm = model_.Find(e.drone);
+    msg::ActorCollision c;
+    c.actor(e.drone);
+    c.other_actor(e.object_kind == air::ObjectKind::kVehicle || e.object_kind == air::ObjectKind::kDrone ? e.object_id : 0);
+    c.other_kind(ToWire(e.object_kind));
+    c.normal_impulse(FromVec(e.normal * (e.impact_speed * (dm != nullptr ? dm->params.mass : 0.0))));
+    c.location(FromVec(e.position));
+    collisions.push_back(c);
+  }
+  out.collisions(std::move(collisions));
+  physics_writer_.Write(out);
 }
 
 msg::AirState AirService::Publish(const msg::FrameStamp& stamp) const {
@@ -390,7 +505,22 @@ msg::AirState AirService::Publish(const msg::FrameStamp& stamp) const {
     c.impact_point(FromVec(s.collision.impact_point));
     c.penetration_depth(s.collision.penetration_depth);
     c.frame(s.collision.frame);
+    const air::AirSimCollisionInfo a = air::ToAirSim(m, s.collision);
+    c.other_name(s.collision.kind == air::ObjectKind::kNone ? std::string() : a.object_name);
+    c.other_id(a.object_id);
+    c.position(FromVec(s.collision.position));
+    c.collision_count(s.collision.collision_count);
     d.collision(c);
+    const air::GeoPoint g = air::ToGeo(geo_, s.position);
+    msg::GeoPoint gps;
+    gps.latitude(g.latitude);
+    gps.longitude(g.longitude);
+    gps.altitude(g.altitude);
+    d.gps_location(gps);
+    d.timestamp(static_cast<uint64_t>(std::llround(stamp.sim_time() * 1e9)));
+    // AirSim: ready once the API has control (always here); can_arm when at rest.
+    d.ready(true);
+    d.can_arm(s.landed == air::LandedState::kLanded && s.velocity.norm() < 0.05);
     d.home_pose(FromPose(m.spawn));
     if (auto it = last_command_.find(s.id); it != last_command_.end()) {
       d.command_id(it->second.first);

@@ -10,6 +10,7 @@
 #include <string>
 
 #include "lockstep/air/air.h"
+#include "lockstep/runtime/declarations.h"
 #include "lockstep/runtime/frame_buffer.h"
 #include "lockstep/runtime/service.h"
 #include "air_blueprints.h"
@@ -24,7 +25,7 @@ class AirService final : public ServiceCore {
   uint64_t StateHash() const override { return air::StateHash(state_); }
   std::vector<msg::BlueprintDeclaration> Blueprints() const override { return AirBlueprints(); }
   std::string CheckSpawn(const msg::SpawnActor& spawn) const override { return CheckAirSpawn(spawn); }
-  // Without a ground_sim in the run the step reads only the tick: it may run on the
+  // Without a vehicle/walker simulator in the run the step reads only the tick: it may run on the
   // receive thread. With one, it waits for the vehicles of frame k-1.
   bool StepNeverWaits() const override { return !wait_for_ground_; }
 
@@ -34,7 +35,10 @@ class AirService final : public ServiceCore {
  private:
   void Apply(const msg::Command& c, uint64_t frame, air::Commands* out);
   void Fail(const msg::FrameStamp& stamp, uint32_t actor, const std::string& why);
-  air::Environment Environment(const msg::Tick& tick);
+  // The vehicles of frame k-1 (Jacobi coupling); throws InputError when they do not come.
+  std::vector<air::VehicleBox> Vehicles(const msg::Tick& tick);
+  air::Environment Environment(std::vector<air::VehicleBox> vehicles) const;
+  void PublishPhysicsEvents(const msg::FrameStamp& stamp);
   msg::AirState Publish(const msg::FrameStamp& stamp) const;
   void LoadTown(const msg::WorldInfo& world);
 
@@ -47,12 +51,20 @@ class AirService final : public ServiceCore {
   std::optional<msg::MapData> map_;                       // latest map from the coordinator
   uint64_t town_hash_ = 0;                                // map whose mesh is in model_.statics
   std::shared_ptr<const air::StaticMesh> town_mesh_;
-  std::atomic<bool> wait_for_ground_{false};  // a ground_sim is in the run: use its vehicles (Jacobi, frame k-1)
+  // A required member declares vehicle or walker blueprints (lockstep/blueprints): use its
+  // GroundState of frame k-1 (Jacobi). Decided at BeginRun from the declarations, never by name.
+  std::atomic<bool> wait_for_ground_{false};
+  Declarations declarations_;
   air::World model_;
   air::WorldState state_;
   std::map<uint32_t, std::string> blueprints_;
   std::map<uint32_t, std::pair<uint64_t, msg::DroneCommandStatus>> last_command_;  // per drone
   std::vector<msg::SimEvent> pending_events_;
+  Writer<msg::PhysicsEvents> physics_writer_;
+  air::GeoReference geo_;                 // the map's geo-reference (GPS, moveToGPS)
+  air::Vec3 api_wind_ = air::Vec3::Zero();  // m/s ENU, simSetWind (all drones)
+  float wind_intensity_ = 0;              // weather's wind_intensity (0..100)
+  double input_timeout_s_ = 10;           // s, world settings' service_timeout: no inputs -> fault
   Reader<msg::MapData> map_reader_;  // last: its callback uses the members above
 };
 

@@ -46,6 +46,9 @@ const char* CommandName(const CommandBody& body) {
           [](const cmd::RotateByYawRate&) { return "rotate_by_yaw_rate"; },
           [](const cmd::SetGains&) { return "set_gains"; },
           [](const cmd::SetPose&) { return "set_pose"; },
+          [](const cmd::MoveToZ&) { return "move_to_z"; },
+          [](const cmd::MoveByRollPitchYawrateZ&) { return "move_by_roll_pitch_yawrate_z"; },
+          [](const cmd::SetKinematics&) { return "set_kinematics"; },
       },
       body);
 }

@@ -41,6 +41,30 @@ void Mix(const DerivedParams& derived, double throttle, const Vec3& torque,
   }
 }
 
+void MixAirSim(const DerivedParams& derived, double throttle, const Vec3& torque,
+               std::array<double, kMaxRotors>* motors) {
+  const int n = static_cast<int>(derived.rotors.size());
+  motors->fill(0.0);
+  if (throttle < kMinAnglingThrottle) {  // too little thrust to steer: all motors alike
+    for (int i = 0; i < n; ++i) (*motors)[i] = throttle;
+    return;
+  }
+  double lo = 1e300, hi = -1e300;
+  for (int i = 0; i < n; ++i) {
+    const RotorGeometry& r = derived.rotors[i];
+    (*motors)[i] = throttle + torque.x() * r.mix_roll + torque.y() * r.mix_pitch + torque.z() * r.mix_yaw;
+    lo = std::min(lo, (*motors)[i]);
+  }
+  if (lo < 0) {
+    for (int i = 0; i < n; ++i) (*motors)[i] -= lo;
+  }
+  for (int i = 0; i < n; ++i) hi = std::max(hi, (*motors)[i]);
+  if (hi > 1.0) {
+    for (int i = 0; i < n; ++i) (*motors)[i] /= hi;
+  }
+  for (int i = 0; i < n; ++i) (*motors)[i] = std::clamp((*motors)[i], 0.0, 1.0);
+}
+
 void ControllerUpdate(const MultirotorParams& params, const DerivedParams& derived,
                       const ControlGoal& goal, const KinematicsView& k, double gravity,
                       double density_ratio, double h, ControllerState* st,
@@ -93,16 +117,24 @@ void ControllerUpdate(const MultirotorParams& params, const DerivedParams& deriv
     }
     return p_gain * err;
   };
+  const bool airsim = params.gain_model == GainModel::kAirSim;
+  // simple_flight's PositionController: per world axis, clip(p e, -1, 1) * velocity limit.
+  auto position_pid = [&](double err, double p_gain) { return std::clamp(p_gain * err, -1.0, 1.0) * g.max_velocity; };
   if (goal.horizontal == H::kPosition) {
     const Eigen::Vector2d e = (goal.position - k.position).head<2>();
     const double d = e.norm();
-    if (d > 1e-12) {
+    if (airsim && goal.closing_gain_xy <= 0) {
+      v_goal.x() += position_pid(e.x(), g.position_p_xy);
+      v_goal.y() += position_pid(e.y(), g.position_p_xy);
+    } else if (d > 1e-12) {
       const double sp = std::abs(closing(d, g.position_p_xy, goal.closing_gain_xy));
       v_goal.head<2>() += e / d * sp;
     }
   }
   if (goal.vertical == V::kPosition) {
-    v_goal.z() += closing(goal.position.z() - k.position.z(), g.position_p_z, goal.closing_gain_z);
+    const double ez = goal.position.z() - k.position.z();
+    v_goal.z() += airsim && goal.closing_gain_z <= 0 ? position_pid(ez, g.position_p_z)
+                                                     : closing(ez, g.position_p_z, goal.closing_gain_z);
   }
   {
     const double sxy = v_goal.head<2>().norm();
@@ -113,7 +145,21 @@ void ControllerUpdate(const MultirotorParams& params, const DerivedParams& deriv
 
   // ---- velocity -> angle level (horizontal)
   double roll_goal = 0, pitch_goal = 0;
-  if (goal.horizontal == H::kPosition || goal.horizontal == H::kVelocity) {
+  if (airsim && (goal.horizontal == H::kPosition || goal.horizontal == H::kVelocity)) {
+    // simple_flight's VelocityController (x, y in the heading frame): tilt goal =
+    // clip(p e + I, -1, 1) * max_tilt; forward speed error -> nose down, left -> roll left.
+    // A moving reference's acceleration adds its tilt (Lockstep's path feed-forward).
+    const double c = std::cos(yaw), s = std::sin(yaw);
+    const Vec3 ev = v_goal - k.velocity;
+    const Eigen::Vector2d e_h(c * ev.x() + s * ev.y(), -s * ev.x() + c * ev.y());
+    Eigen::Vector2d integ = st->vxy_integral.head<2>() + g.velocity_i_xy * e_h * h;
+    integ = integ.cwiseMax(-1.0).cwiseMin(1.0);
+    st->vxy_integral.head<2>() = integ;
+    const double a_fwd = c * goal.accel.x() + s * goal.accel.y();
+    const double a_left = -s * goal.accel.x() + c * goal.accel.y();
+    pitch_goal = std::clamp(g.velocity_p_xy * e_h.x() + integ.x(), -1.0, 1.0) * g.max_tilt + std::atan2(a_fwd, gravity);
+    roll_goal = -std::clamp(g.velocity_p_xy * e_h.y() + integ.y(), -1.0, 1.0) * g.max_tilt - std::atan2(a_left, gravity);
+  } else if (goal.horizontal == H::kPosition || goal.horizontal == H::kVelocity) {
     const Eigen::Vector2d ev = (v_goal - k.velocity).head<2>();
     Eigen::Vector2d integ = st->vxy_integral.head<2>() + g.velocity_i_xy * ev * h;
     const double ilim = g.max_tilt;
@@ -131,6 +177,13 @@ void ControllerUpdate(const MultirotorParams& params, const DerivedParams& deriv
     roll_goal = goal.roll;
     pitch_goal = goal.pitch;
   }
+  if (k.grounded && (goal.horizontal == H::kPosition || goal.horizontal == H::kVelocity)) {
+    // A ground-locked drone cannot tilt: asking for it would saturate the rate loop and starve
+    // the collective thrust it needs to lift off.
+    roll_goal = 0;
+    pitch_goal = 0;
+    st->vxy_integral.setZero();
+  }
   roll_goal = std::clamp(roll_goal, -g.max_tilt, g.max_tilt);
   pitch_goal = std::clamp(pitch_goal, -g.max_tilt, g.max_tilt);
   st->roll_goal = roll_goal;
@@ -138,7 +191,15 @@ void ControllerUpdate(const MultirotorParams& params, const DerivedParams& deriv
 
   // ---- velocity -> throttle (vertical)
   double throttle = 0;
-  if (goal.vertical == V::kPosition || goal.vertical == V::kVelocity) {
+  if (airsim && (goal.vertical == V::kPosition || goal.vertical == V::kVelocity)) {
+    // simple_flight's VelocityController z: u = clip(p e + I, -1, 1) with the integrator
+    // discounted by 0.9999 per update and clipped to [-1, 1]; throttle = (1 + u) / 2 (AirSim
+    // writes (1 - u) / 2 in NED), at least min_throttle. No hover feed-forward, no tilt term.
+    const double ez = v_goal.z() - k.velocity.z();
+    st->vz_integral = std::clamp(st->vz_integral * 0.9999 + g.velocity_i_z * ez * h, -1.0, 1.0);
+    const double u = std::clamp(g.velocity_p_z * ez + st->vz_integral, -1.0, 1.0);
+    throttle = std::max((1.0 + u) / 2.0, g.min_throttle);
+  } else if (goal.vertical == V::kPosition || goal.vertical == V::kVelocity) {
     const double ez = v_goal.z() - k.velocity.z();
     const double ff = derived.hover_throttle / density_ratio * (1.0 + goal.accel.z() / gravity);
     const double tilt = std::max(std::cos(roll) * std::cos(pitch), 0.5);
@@ -161,9 +222,13 @@ void ControllerUpdate(const MultirotorParams& params, const DerivedParams& deriv
     rate_goal = goal.rates;
   } else {
     const double mr = g.max_angle_rate;
-    const double droll = std::clamp(g.angle_level_p.x() * (roll_goal - roll), -mr, mr);
-    const double dpitch = std::clamp(g.angle_level_p.y() * (pitch_goal - pitch), -mr, mr);
-    const double dyaw = std::clamp(g.angle_level_p.z() * WrapAngle(st->yaw_ref - yaw) + yaw_rate_ff, -mr, mr);
+    // AirSim: rate goal = clip(p e, -1, 1) * max_angle_rate; physical: clamp(p e, +-max).
+    auto level = [&](double p_gain, double err) {
+      return airsim ? std::clamp(p_gain * err, -1.0, 1.0) * mr : std::clamp(p_gain * err, -mr, mr);
+    };
+    const double droll = level(g.angle_level_p.x(), roll_goal - roll);
+    const double dpitch = level(g.angle_level_p.y(), pitch_goal - pitch);
+    const double dyaw = std::clamp(level(g.angle_level_p.z(), WrapAngle(st->yaw_ref - yaw)) + yaw_rate_ff, -mr, mr);
     // Euler rates -> body rates (Z-Y-X).
     const double sr = std::sin(roll), cr = std::cos(roll), sp = std::sin(pitch), cp = std::cos(pitch);
     rate_goal = Vec3(droll - sp * dyaw, cr * dpitch + sr * cp * dyaw, -sr * dpitch + cr * cp * dyaw);
@@ -181,7 +246,11 @@ void ControllerUpdate(const MultirotorParams& params, const DerivedParams& deriv
                           .cwiseMax(-1.0)
                           .cwiseMin(1.0);
   st->torque_out = torque;
-  Mix(derived, throttle, torque, motors);
+  if (airsim) {
+    MixAirSim(derived, throttle, torque, motors);
+  } else {
+    Mix(derived, throttle, torque, motors);
+  }
 }
 
 }  // namespace lockstep::air

@@ -24,6 +24,8 @@ constexpr double kProjection = 0.4;      // fraction of excess penetration remov
 constexpr double kSupportNormalZ = 0.7;  // normal.z above which a contact supports the drone
 constexpr double kLandedHold = 0.02;     // s, support contact recency for LANDED
 constexpr double kOnsetGap = 0.1;        // s, contact gap that makes a new collision onset
+constexpr double kDragMinVelocity = 0.1; // m/s, AirSim: slower faces feel no drag
+constexpr double kAxisTolerance = 0.25;  // AirSim: |body z . normal| within 1 +- 0.25 is "level"
 
 inline std::uint64_t Rotl(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
 
@@ -100,6 +102,7 @@ void ResetToSpawn(const DroneModel& dm, DroneState* s) {
   for (RotorState& r : s->rotors) r = RotorState{};
   s->total_thrust = 0;
   s->armed = false;
+  s->grounded = false;
   s->gust.setZero();
   const ControllerGains gains = s->controller.gains;
   s->controller = ControllerState{};
@@ -202,19 +205,35 @@ void PhysicsSubstep(const World& model, const DroneModel& dm, DroneState* s, con
   }
   const Vec3 v_air_b = rot.transpose() * (s->velocity - env.wind - s->gust);
   const Vec3& w = s->angular_velocity;
-  const double cl = 0.5 * rho * p.linear_drag_coefficient;
-  const double ca = 0.5 * rho * p.angular_drag_coefficient;
-  if (cl > 0 || ca > 0) {
-    for (const DragFace& f : d.faces) {
-      const double vn = f.normal.dot(v_air_b);
-      const double wn = f.normal.dot(w.cross(f.position));
-      double mag = 0;
-      if (vn > 0) mag += cl * f.area * vn * vn;
-      if (wn > 0) mag += ca * f.area * wn * wn;
-      if (mag > 0) {
-        const Vec3 fd = -mag * f.normal;
-        force_b += fd;
-        torque_b += f.position.cross(fd);
+  if (p.drag_model == DragModel::kAirSim) {
+    // AirSim (FastPhysicsEngine::getDragWrench): each face feels the combined velocity of its
+    // centre, v + w x r, squared, with one coefficient; faces slower than 0.1 m/s feel nothing.
+    const double cl = 0.5 * rho * p.linear_drag_coefficient;
+    if (cl > 0) {
+      for (const DragFace& f : d.faces) {
+        const double vn = f.normal.dot(v_air_b + w.cross(f.position));
+        if (vn > kDragMinVelocity) {
+          const Vec3 fd = -(cl * f.area * vn * vn) * f.normal;
+          force_b += fd;
+          torque_b += f.position.cross(fd);
+        }
+      }
+    }
+  } else {
+    const double cl = 0.5 * rho * p.linear_drag_coefficient;
+    const double ca = 0.5 * rho * p.angular_drag_coefficient;
+    if (cl > 0 || ca > 0) {
+      for (const DragFace& f : d.faces) {
+        const double vn = f.normal.dot(v_air_b);
+        const double wn = f.normal.dot(w.cross(f.position));
+        double mag = 0;
+        if (vn > 0) mag += cl * f.area * vn * vn;
+        if (wn > 0) mag += ca * f.area * wn * wn;
+        if (mag > 0) {
+          const Vec3 fd = -mag * f.normal;
+          force_b += fd;
+          torque_b += f.position.cross(fd);
+        }
       }
     }
   }
@@ -231,6 +250,7 @@ void PhysicsSubstep(const World& model, const DroneModel& dm, DroneState* s, con
   // ---- contacts (obstacles at the end of the sub-step)
   Contact contacts[kMaxContacts];
   int nc = 0;
+  bool grounded_step = false;
   const StaticGeometry& sg = model.statics;
   const double t_obj = t_tick + h;
   auto add = [&](const ContactPoint& cp) {
@@ -314,8 +334,63 @@ void PhysicsSubstep(const World& model, const DroneModel& dm, DroneState* s, con
     }
   }
 
+  // ---- AirSim ground lock (FastPhysicsEngine::getNextKinematicsOnCollision): a level drone
+  // descending onto a supporting surface stops there (no bounce, levelled, moving with the
+  // surface) and stays until its thrust exceeds its weight.
+  if (p.landing_model == LandingModel::kGroundLock && finite_pose) {
+    int support = -1;
+    for (int i = 0; i < nc; ++i) {
+      if (contacts[i].cp.normal.z() > kSupportNormalZ &&
+          (support < 0 || contacts[i].cp.depth > contacts[support].cp.depth)) {
+        support = i;
+      }
+    }
+    if (s->grounded && (support < 0 || total_thrust >= m * model.gravity)) s->grounded = false;
+    if (!s->grounded && support >= 0) {
+      const Vec3 vrel = v0 - contacts[support].cp.object_velocity;
+      const Vec3 up_body = rot.transpose() * contacts[support].cp.normal;
+      const bool level = std::abs(std::abs(up_body.z()) - 1.0) <= kAxisTolerance;
+      const bool landing = -vrel.z() > std::abs(vrel.x()) && -vrel.z() > std::abs(vrel.y());
+      s->grounded = level && landing && total_thrust < m * model.gravity;
+    }
+    if (s->grounded) {
+      const Contact& c = contacts[support];
+      const Vec3 v_surface = c.cp.object_velocity;
+      double yaw = std::atan2(rot(1, 0), rot(0, 0));
+      // Carried by the surface: a vehicle's rigid motion over the sub-step (turning with it),
+      // static surfaces hold the drone still.
+      const VehicleBox* carrier = nullptr;
+      if (c.cp.kind == ObjectKind::kVehicle) {
+        for (const VehicleBox& vb : env.vehicles) {
+          if (vb.id == c.cp.object_id) carrier = &vb;
+        }
+      }
+      if (carrier != nullptr) {
+        const Vec3 centre = carrier->pose.position + carrier->velocity * t_tick;
+        const Vec3 turn = carrier->angular_velocity * h;
+        const Quat q = turn.norm() > 0 ? Quat(Eigen::AngleAxisd(turn.norm(), turn.normalized())) : Quat::Identity();
+        s->position = centre + carrier->velocity * h + q * (s->position - centre);
+        yaw += turn.z();
+      } else {
+        s->position += v_surface * h;
+      }
+      s->orientation = Quat(Eigen::AngleAxisd(yaw, Vec3::UnitZ()));
+      // Out of the surface, along its normal (the deepest support contact).
+      const double excess = c.cp.depth - kSlop;
+      if (excess > 0) s->position += c.cp.normal * excess;
+      s->acceleration = (v_surface - v0) / h;
+      s->angular_acceleration = -w0 / h;
+      s->velocity = v_surface;
+      s->angular_velocity.setZero();
+      for (int i = 0; i < nc; ++i) {
+        contacts[i].approach = std::max(0.0, -contacts[i].cp.normal.dot(v0 - contacts[i].cp.object_velocity));
+      }
+      grounded_step = true;
+    }
+  }
+
   Vec3 dv_contact = Vec3::Zero();
-  if (nc > 0) {
+  if (nc > 0 && !grounded_step) {
     const Mat3 iw_inv = rot * d.inertia_inv * rot.transpose();
     Vec3 ww = rot * w1;  // world angular velocity
     const double inv_m = 1.0 / m;
@@ -380,7 +455,9 @@ void PhysicsSubstep(const World& model, const DroneModel& dm, DroneState* s, con
   }
 
   // ---- integrate
-  if (nc == 0) {
+  if (grounded_step) {
+    // Pose and velocity were set by the ground lock.
+  } else if (nc == 0) {
     s->position += (v0 + v1) * (0.5 * h);
   } else {
     s->position += v1 * h;
@@ -390,15 +467,17 @@ void PhysicsSubstep(const World& model, const DroneModel& dm, DroneState* s, con
     const double excess = contacts[deepest].cp.depth - kSlop;
     if (excess > 0) s->position += contacts[deepest].cp.normal * (kProjection * excess * contacts[deepest].share);
   }
-  const Vec3 w_avg = (w0 + w1) * 0.5;
-  const double angle = w_avg.norm() * h;
-  if (angle > 0) {
-    s->orientation = (s->orientation * Quat(Eigen::AngleAxisd(angle, w_avg.normalized()))).normalized();
+  if (!grounded_step) {
+    const Vec3 w_avg = (w0 + w1) * 0.5;
+    const double angle = w_avg.norm() * h;
+    if (angle > 0) {
+      s->orientation = (s->orientation * Quat(Eigen::AngleAxisd(angle, w_avg.normalized()))).normalized();
+    }
+    s->acceleration = a + dv_contact / h;
+    s->angular_acceleration = (w1 - w0) / h;
+    s->velocity = v1;
+    s->angular_velocity = w1;
   }
-  s->acceleration = a + dv_contact / h;
-  s->angular_acceleration = (w1 - w0) / h;
-  s->velocity = v1;
-  s->angular_velocity = w1;
   const double t_end = t + h;
 
   // ---- contacts -> collision info, events, landed state

@@ -14,7 +14,7 @@
 namespace lockstep::air {
 namespace {
 
-using FieldPtr = std::variant<double*, Vec3*, FrameType*>;
+using FieldPtr = std::variant<double*, Vec3*, FrameType*, DragModel*, GainModel*, LandingModel*>;
 struct Field {
   std::string key;
   FieldPtr ptr;
@@ -38,6 +38,26 @@ bool ParseFrame(const std::string& s, FrameType* f) {
   }
   return true;
 }
+
+// Model choices by their names (ToString of each value).
+template <class E>
+bool ParseChoice(const std::string& s, E* out, int count) {
+  for (int i = 0; i < count; ++i) {
+    if (s == ToString(static_cast<E>(i))) {
+      *out = static_cast<E>(i);
+      return true;
+    }
+  }
+  return false;
+}
+template <class E>
+std::string ChoiceNames(int count) {
+  std::string out;
+  for (int i = 0; i < count; ++i) out += std::string(i ? " or " : "") + ToString(static_cast<E>(i));
+  return out;
+}
+// Parses a string into any field kind; `expected` says what was wanted when it fails.
+bool ParseField(const FieldPtr& f, const std::string& value, std::string* expected);
 
 bool ParseDouble(const std::string& s, double* out) {
   if (s.empty()) return false;
@@ -141,16 +161,49 @@ void LoadMap(const YAML::Node& map, const std::string& prefix, std::vector<Field
       **d = YamlDouble(k, v, name);
     } else if (auto* vec = std::get_if<Vec3*>(&f->ptr)) {
       **vec = YamlVec3(k, v, name);
-    } else if (auto* fr = std::get_if<FrameType*>(&f->ptr)) {
-      if (!v.IsScalar() || !ParseFrame(v.Scalar(), *fr)) {
-        YamlError(v, "key 'frame': expected quad_x, quad_plus or hexa_x, got '" +
+    } else {
+      std::string expected;
+      if (!v.IsScalar() || !ParseField(f->ptr, v.Scalar(), &expected)) {
+        YamlError(v, "key '" + name + "': expected " + expected + ", got '" +
                          (v.IsScalar() ? v.Scalar() : std::string("?")) + "'");
       }
     }
   }
 }
 
+bool ParseField(const FieldPtr& f, const std::string& value, std::string* expected) {
+  if (auto* d = std::get_if<double*>(&f)) {
+    *expected = "a finite number";
+    return ParseDouble(value, *d);
+  }
+  if (auto* v = std::get_if<Vec3*>(&f)) {
+    *expected = "three numbers 'x,y,z'";
+    return ParseVec3(value, *v);
+  }
+  if (auto* fr = std::get_if<FrameType*>(&f)) {
+    *expected = "quad_x, quad_plus or hexa_x";
+    return ParseFrame(value, *fr);
+  }
+  if (auto* m = std::get_if<DragModel*>(&f)) {
+    *expected = ChoiceNames<DragModel>(2);
+    return ParseChoice(value, *m, 2);
+  }
+  if (auto* m = std::get_if<GainModel*>(&f)) {
+    *expected = ChoiceNames<GainModel>(2);
+    return ParseChoice(value, *m, 2);
+  }
+  if (auto* m = std::get_if<LandingModel*>(&f)) {
+    *expected = ChoiceNames<LandingModel>(2);
+    return ParseChoice(value, *m, 2);
+  }
+  return false;
+}
+
 }  // namespace
+
+const char* ToString(DragModel m) { return m == DragModel::kAirSim ? "airsim" : "faces"; }
+const char* ToString(GainModel m) { return m == GainModel::kAirSim ? "airsim" : "physical"; }
+const char* ToString(LandingModel m) { return m == LandingModel::kGroundLock ? "ground_lock" : "impulse"; }
 
 const char* ToString(FrameType f) {
   switch (f) {
@@ -261,27 +314,49 @@ DerivedParams DeriveParams(const MultirotorParams& p) {
     rg.mix_pitch = -rg.position.x() / max_x;  // tau_y = -x T
     rg.mix_yaw = -rg.spin;                    // reaction torque = -spin Q about +z
   }
-  // Drag faces: the six faces of the body box, then top and bottom of each rotor disc.
+  // Drag faces.
   const Vec3& b = p.body_box;
-  for (int axis = 0; axis < 3; ++axis) {
-    const double area = b[(axis + 1) % 3] * b[(axis + 2) % 3];
-    for (double sign : {1.0, -1.0}) {
-      DragFace f;
-      f.normal = Vec3::Zero();
-      f.normal[axis] = sign;
-      f.position = f.normal * (b[axis] / 2);
-      f.area = area;
-      d.faces.push_back(f);
+  const double nrot = static_cast<double>(d.rotors.size());
+  const double dia = p.rotor.propeller_diameter;
+  if (p.drag_model == DragModel::kAirSim) {
+    // AirSim (MultiRotorPhysicsBody::createDragVertices): six faces at +-body_box (full extent,
+    // as AirSim places them), the rotors folded in: pi D^2 per rotor on top and bottom (AirSim's
+    // formula, four times the disc area), pi D h per rotor on the four sides.
+    const Vec3 area(b.y() * b.z() + nrot * std::numbers::pi * dia * p.rotor.propeller_height,
+                    b.x() * b.z() + nrot * std::numbers::pi * dia * p.rotor.propeller_height,
+                    b.x() * b.y() + nrot * std::numbers::pi * dia * dia);
+    for (int axis = 2; axis >= 0; --axis) {
+      for (double sign : {-1.0, 1.0}) {
+        DragFace f;
+        f.normal = Vec3::Zero();
+        f.normal[axis] = sign;
+        f.position = f.normal * b[axis];
+        f.area = area[axis];
+        d.faces.push_back(f);
+      }
     }
-  }
-  const double disc = std::numbers::pi * p.rotor.propeller_diameter * p.rotor.propeller_diameter / 4;
-  for (const RotorGeometry& rg : d.rotors) {
-    for (double sign : {1.0, -1.0}) {
-      DragFace f;
-      f.normal = Vec3(0, 0, sign);
-      f.position = rg.position + Vec3(0, 0, sign * p.rotor.propeller_height / 2);
-      f.area = disc;
-      d.faces.push_back(f);
+  } else {
+    // Lockstep's faces model: the bare body faces, then top and bottom of each rotor disc.
+    for (int axis = 0; axis < 3; ++axis) {
+      const double area = b[(axis + 1) % 3] * b[(axis + 2) % 3];
+      for (double sign : {1.0, -1.0}) {
+        DragFace f;
+        f.normal = Vec3::Zero();
+        f.normal[axis] = sign;
+        f.position = f.normal * (b[axis] / 2);
+        f.area = area;
+        d.faces.push_back(f);
+      }
+    }
+    const double disc = std::numbers::pi * dia * dia / 4;
+    for (const RotorGeometry& rg : d.rotors) {
+      for (double sign : {1.0, -1.0}) {
+        DragFace f;
+        f.normal = Vec3(0, 0, sign);
+        f.position = rg.position + Vec3(0, 0, sign * p.rotor.propeller_height / 2);
+        f.area = disc;
+        d.faces.push_back(f);
+      }
     }
   }
   // Inertia: solid box of the non-motor mass plus point masses at the hubs.
@@ -303,8 +378,12 @@ DerivedParams DeriveParams(const MultirotorParams& p) {
                            std::pow(p.rotor.propeller_diameter, 5) / (2 * std::numbers::pi);
   d.hover_throttle = p.mass * 9.80665 / (n * d.max_thrust_per_rotor);
   if (p.contact_spheres.empty()) {
+    // Centre, each hub and each arm's midpoint: the arms are covered end to end when
+    // arm_length / 2 < 2 contact_radius (generic quad: 0.114 m < 0.12 m). The propeller tips
+    // beyond contact_radius from the hub are not covered (docs/air.md, contact_test).
     d.spheres.push_back({Vec3::Zero(), p.contact_radius});
     for (const RotorGeometry& rg : d.rotors) d.spheres.push_back({rg.position, p.contact_radius});
+    for (const RotorGeometry& rg : d.rotors) d.spheres.push_back({rg.position / 2, p.contact_radius});
   } else {
     d.spheres = p.contact_spheres;
   }
@@ -360,19 +439,8 @@ MultirotorParams ParamsFromAttributes(const std::map<std::string, std::string>& 
     if (f == nullptr) {
       throw std::invalid_argument("unknown multirotor attribute '" + key + "'");
     }
-    bool ok = false;
-    const char* expected = "";
-    if (auto* d = std::get_if<double*>(&f->ptr)) {
-      ok = ParseDouble(value, *d);
-      expected = "a finite number";
-    } else if (auto* v = std::get_if<Vec3*>(&f->ptr)) {
-      ok = ParseVec3(value, *v);
-      expected = "three numbers 'x,y,z'";
-    } else if (auto* fr = std::get_if<FrameType*>(&f->ptr)) {
-      ok = ParseFrame(value, *fr);
-      expected = "quad_x, quad_plus or hexa_x";
-    }
-    if (!ok) {
+    std::string expected;
+    if (!ParseField(f->ptr, value, &expected)) {
       throw std::invalid_argument("multirotor attribute '" + key + "': expected " + expected +
                                   ", got '" + value + "'");
     }

@@ -25,6 +25,12 @@ using V = ControlGoal::Vertical;
 constexpr double kMaxSpeedCmd = 100.0;   // m/s, largest accepted commanded speed
 constexpr double kMaxRateCmd = 20.0;     // rad/s
 constexpr double kMaxCoordinate = 1e6;   // m
+// AirSim MultirotorApiBase constants.
+constexpr double kTakeoffMaxSpeed = 0.05;    // m/s, approx_zero_vel_: takeoff refused above it
+constexpr double kLandStillSpeed = 0.05;     // m/s, approx_zero_vel_: land's "stopped" speed
+constexpr double kLandStillTime = 0.22;      // s, land: > 10 command periods of 20 ms stopped
+constexpr double kYawStillRate = 0.01;       // rad/s, approx_zero_angular_vel_: rotateToYaw end
+constexpr double kCommandPeriod = 0.02;      // s, simple_flight's command period (auto lookahead)
 
 std::string Num(double v) {
   std::ostringstream os;
@@ -88,8 +94,14 @@ std::string ValidateBody(const DroneModel& dm, const DroneState& ds, const Comma
           [](const cmd::Arm&) { return std::string(); },
           [](const cmd::Disarm&) { return std::string(); },
           [](const cmd::Hover&) { return std::string(); },
-          [](const cmd::Takeoff& c) {
-            return First({CheckRange("takeoff height", c.height, 0, 1000, "m"), CheckPositive("timeout", c.timeout)});
+          [&](const cmd::Takeoff& c) {
+            std::string e = First({CheckRange("takeoff height", c.height, 0, 1000, "m"), CheckPositive("timeout", c.timeout)});
+            // AirSim refuses a takeoff while the drone moves (relative to what it stands on).
+            const Vec3 rel = ds.velocity - (ds.landed == LandedState::kLanded ? ds.support_velocity : Vec3::Zero());
+            if (e.empty() && rel.norm() > kTakeoffMaxSpeed) {
+              e = "cannot take off while moving at " + Num(rel.norm()) + " m/s (AirSim limit 0.05 m/s)";
+            }
+            return e;
           },
           [](const cmd::Land& c) { return CheckPositive("timeout", c.timeout); },
           [](const cmd::GoHome& c) {
@@ -117,6 +129,27 @@ std::string ValidateBody(const DroneModel& dm, const DroneState& ds, const Comma
                                    CheckPositive("gain", c.gain), CheckPositive("duration", c.duration),
                                    CheckYawMode(c.yaw_mode, Drivetrain::kMaxDegreeOfFreedom)});
             if (e.empty() && c.velocity.norm() > kMaxSpeedCmd) e = "target velocity exceeds 100 m/s";
+            return e;
+          },
+          [](const cmd::MoveToZ& c) {
+            return First({CheckRange("z", c.z, -kMaxCoordinate, kMaxCoordinate, "m"), CheckPositive("velocity", c.velocity),
+                          CheckRange("velocity", c.velocity, 0, kMaxSpeedCmd, "m/s"), CheckPositive("timeout", c.timeout),
+                          CheckYawMode(c.yaw_mode, Drivetrain::kMaxDegreeOfFreedom),
+                          CheckLookahead(c.lookahead, c.adaptive_lookahead)});
+          },
+          [&](const cmd::MoveByRollPitchYawrateZ& c) {
+            return First({CheckTilt("roll", c.roll, g.max_tilt), CheckTilt("pitch", c.pitch, g.max_tilt),
+                          CheckRange("yaw_rate", c.yaw_rate, -kMaxRateCmd, kMaxRateCmd, "rad/s"),
+                          CheckRange("z", c.z, -kMaxCoordinate, kMaxCoordinate, "m"), CheckPositive("duration", c.duration)});
+          },
+          [](const cmd::SetKinematics& c) {
+            std::string e = First({CheckPosition("pose position", c.pose.position), CheckFinite("velocity", c.velocity),
+                                   CheckFinite("angular_velocity", c.angular_velocity)});
+            if (e.empty() && (!c.pose.orientation.coeffs().allFinite() || c.pose.orientation.norm() < 1e-6)) {
+              e = "pose orientation is not a finite non-zero quaternion";
+            }
+            if (e.empty() && c.velocity.norm() > kMaxSpeedCmd) e = "velocity exceeds 100 m/s";
+            if (e.empty() && c.angular_velocity.cwiseAbs().maxCoeff() > kMaxRateCmd) e = "angular velocity exceeds 20 rad/s";
             return e;
           },
           [](const cmd::MoveByVelocity& c) {
@@ -194,7 +227,7 @@ std::string ValidateBody(const DroneModel& dm, const DroneState& ds, const Comma
 }
 
 bool NeedsArmed(const CommandBody& b) {
-  return IsMotionCommand(b) && !std::holds_alternative<cmd::SetPose>(b);
+  return IsMotionCommand(b) && !std::holds_alternative<cmd::SetPose>(b) && !std::holds_alternative<cmd::SetKinematics>(b);
 }
 
 // ----------------------------------------------------------------- command bookkeeping
@@ -252,7 +285,9 @@ void SetupPath(ActiveCommand& ac, const Vec3& start, const std::vector<Vec3>& pt
   ac.s_dot = 0;
   ac.segment = 1;
   ac.speed = speed;
-  ac.lookahead = lookahead > 0 ? lookahead : std::max(1.0, speed);
+  // AirSim getAutoLookahead: speed x command period x (30 adaptive, else 40), at least 0.75 m
+  // (1.5 x the distance accuracy 0.5 m).
+  ac.lookahead = lookahead > 0 ? lookahead : std::max(speed * kCommandPeriod * (adaptive > 0 ? 30.0 : 40.0), 0.75);
   ac.adaptive_lookahead = adaptive;
 }
 
@@ -323,11 +358,23 @@ void ApplyCommand(Ctx& c, const Command& cm, double t) {
             if (ds.armed) EnterHold(ds, ds.position);
             immediate();
           },
+          [&](const cmd::SetKinematics& sk) {
+            ds.position = sk.pose.position;
+            ds.orientation = sk.pose.orientation.normalized();
+            ds.velocity = sk.velocity;
+            ds.angular_velocity = sk.angular_velocity;
+            ds.grounded = false;
+            ds.controller.yaw_ref = YawOf(ds.orientation);
+            if (ds.armed) EnterHold(ds, ds.position);
+            else ac.mode = CommandMode::kIdle;
+            immediate();
+          },
           [&](const cmd::SetPose& sp) {
             ds.position = sp.pose.position;
             ds.orientation = sp.pose.orientation.normalized();
             ds.velocity.setZero();
             ds.angular_velocity.setZero();
+            ds.grounded = false;
             ds.controller.yaw_ref = YawOf(ds.orientation);
             ds.controller.vz_integral = 0;
             ds.controller.vxy_integral.setZero();
@@ -337,7 +384,7 @@ void ApplyCommand(Ctx& c, const Command& cm, double t) {
           },
           [&](const cmd::Takeoff& k) {
             const double hgt = k.height > 0 ? k.height : p.takeoff_height;
-            SetupPath(ac, ds.position, {ds.position + Vec3(0, 0, hgt)}, p.takeoff_speed, -1, 0);
+            SetupPath(ac, ds.position, {ds.position + Vec3(0, 0, hgt)}, p.takeoff_speed, -1, 1);
             start(CommandMode::kTakeoff, k.timeout);
           },
           [&](const cmd::Land& k) {
@@ -345,13 +392,16 @@ void ApplyCommand(Ctx& c, const Command& cm, double t) {
             start(CommandMode::kLand, k.timeout);
           },
           [&](const cmd::GoHome& k) {
-            const Vec3& home = c.dm.spawn.position;
-            const Vec3 goal(home.x(), home.y(), std::max(ds.position.z(), home.z() + p.takeoff_height));
-            SetupPath(ac, ds.position, {goal}, k.velocity, -1, 1);
+            SetupPath(ac, ds.position, {c.dm.spawn.position}, k.velocity, -1, 1);
             start(CommandMode::kPath, k.timeout);
           },
           [&](const cmd::MoveToPosition& k) {
             SetupPath(ac, ds.position, {k.position}, k.velocity, k.lookahead, k.adaptive_lookahead);
+            start(CommandMode::kPath, k.timeout);
+          },
+          [&](const cmd::MoveToZ& k) {
+            SetupPath(ac, ds.position, {Vec3(ds.position.x(), ds.position.y(), k.z)}, k.velocity, k.lookahead,
+                      k.adaptive_lookahead);
             start(CommandMode::kPath, k.timeout);
           },
           [&](const cmd::MoveOnPath& k) {
@@ -375,6 +425,7 @@ void ApplyCommand(Ctx& c, const Command& cm, double t) {
           [&](const cmd::MoveByRollPitchYawThrottle& k) { start(CommandMode::kRpyThrottle, k.duration); },
           [&](const cmd::MoveByRollPitchYawZ& k) { start(CommandMode::kRpyZ, k.duration); },
           [&](const cmd::MoveByRollPitchYawrateThrottle& k) { start(CommandMode::kRpyRateThrottle, k.duration); },
+          [&](const cmd::MoveByRollPitchYawrateZ& k) { start(CommandMode::kRpyRateZ, k.duration); },
           [&](const cmd::MoveByAngleRatesThrottle& k) { start(CommandMode::kRatesThrottle, k.duration); },
           [&](const cmd::MoveByAngleRatesZ& k) { start(CommandMode::kRatesZ, k.duration); },
           [&](const cmd::MoveByMotorPwms& k) { start(CommandMode::kPwm, k.duration); },
@@ -388,6 +439,12 @@ void ApplyCommand(Ctx& c, const Command& cm, double t) {
           },
       },
       cm.body);
+}
+
+// Absolute-altitude commands: AirSim's position loop (0 = none) or, with the physical gain
+// model, Lockstep's sqrt-limited closing gain.
+double AltitudeGain(const MultirotorParams& p, const DroneState& ds) {
+  return p.gain_model == GainModel::kPhysical ? ds.controller.gains.altitude_gain : 0.0;
 }
 
 void ApplyYawMode(const YawMode& ym, ControlGoal* g) {
@@ -457,9 +514,13 @@ ControlGoal UpdateCommand(Ctx& c, double t, double h) {
         const auto& k = std::get<cmd::RotateToYaw>(ac.body);
         g.yaw_is_rate = false;
         g.yaw = k.yaw;
-        if (std::abs(WrapAngle(k.yaw - YawOf(ds.orientation))) < k.margin) {
-          Finish(c, CommandStatus::kCompleted, t_end);
-          EnterHold(ds, ac.target);
+        // AirSim: within the margin, hold the heading (yaw rate 0) until the yaw rate settles.
+        if (std::abs(WrapAngle(k.yaw - YawOf(ds.orientation))) <= k.margin) {
+          const double yaw_rate = (ds.orientation * ds.angular_velocity).z();
+          if (std::abs(yaw_rate) <= kYawStillRate) {
+            Finish(c, CommandStatus::kCompleted, t_end);
+            EnterHold(ds, ac.target);
+          }
         }
       } else if (ac.mode == CommandMode::kRotateByYawRate) {
         g.yaw = std::get<cmd::RotateByYawRate>(ac.body).yaw_rate;
@@ -472,9 +533,12 @@ ControlGoal UpdateCommand(Ctx& c, double t, double h) {
       const double remaining = total - ac.s;
       Vec3 ref, tangent;
       PathAt(ac, ac.s, &ref, &tangent);
+      // The reference waits while it leads the drone by more than the lookahead; AirSim's
+      // adaptive lookahead adds adaptive_lookahead x the drone's cross-track error.
+      const Vec3 off = ds.position - ref;
       double la = ac.lookahead;
-      if (ac.adaptive_lookahead > 0) la = std::max(la, ac.adaptive_lookahead * ds.velocity.norm());
-      const double lag = (ds.position - ref).norm();
+      if (ac.adaptive_lookahead > 0) la += ac.adaptive_lookahead * (off - tangent * tangent.dot(off)).norm();
+      const double lag = off.norm();
       double sdot_des = std::min(ac.speed, std::sqrt(2.0 * p.path_accel * std::max(remaining, 0.0)));
       while (ac.segment < ac.path.size() && ac.path_s[ac.segment] <= ac.s + 1e-9) ++ac.segment;
       for (std::size_t i = ac.segment; i < ac.path.size(); ++i) {  // slow down for the corners ahead
@@ -520,9 +584,12 @@ ControlGoal UpdateCommand(Ctx& c, double t, double h) {
       g.vertical = V::kVelocity;
       g.position = ac.target;
       g.velocity = Vec3(0, 0, -p.landing_speed);
-      if (ds.landed == LandedState::kLanded) {
+      // AirSim: done once the vertical speed stays within 0.05 m/s for more than 10 command
+      // periods (counted here only while LANDED, see docs/air.md).
+      const double vz_rel = ds.velocity.z() - ds.support_velocity.z();
+      if (ds.landed == LandedState::kLanded && std::abs(vz_rel) <= kLandStillSpeed) {
         if (ac.landed_since < 0) ac.landed_since = t;
-        if (t - ac.landed_since >= 0.1) {
+        if (t_end - ac.landed_since >= kLandStillTime - 1e-9) {
           Finish(c, CommandStatus::kCompleted, t_end);
           ac.mode = CommandMode::kIdle;
           return ControlGoal{};
@@ -559,7 +626,7 @@ ControlGoal UpdateCommand(Ctx& c, double t, double h) {
       g.vertical = V::kPosition;
       g.velocity = ac.velocity;
       g.position = Vec3(0, 0, k.z);
-      g.closing_gain_z = ds.controller.gains.altitude_gain;
+      g.closing_gain_z = AltitudeGain(p, ds);
       g.max_speed = std::max(p.gains.max_velocity, ac.velocity.norm());
       ApplyDrivetrain(k.drivetrain, k.yaw_mode, ac.velocity, &g);
       return g;
@@ -584,7 +651,7 @@ ControlGoal UpdateCommand(Ctx& c, double t, double h) {
       g.yaw_is_rate = false;
       g.yaw = k.yaw;
       g.position = Vec3(0, 0, k.z);
-      g.closing_gain_z = ds.controller.gains.altitude_gain;
+      g.closing_gain_z = AltitudeGain(p, ds);
       return g;
     }
     case CommandMode::kRpyRateThrottle: {
@@ -595,6 +662,17 @@ ControlGoal UpdateCommand(Ctx& c, double t, double h) {
       g.pitch = k.pitch;
       g.yaw = k.yaw_rate;
       g.throttle = k.throttle;
+      return g;
+    }
+    case CommandMode::kRpyRateZ: {
+      const auto& k = std::get<cmd::MoveByRollPitchYawrateZ>(ac.body);
+      g.horizontal = H::kAngle;
+      g.vertical = V::kPosition;
+      g.roll = k.roll;
+      g.pitch = k.pitch;
+      g.yaw = k.yaw_rate;
+      g.position = Vec3(0, 0, k.z);
+      g.closing_gain_z = AltitudeGain(p, ds);
       return g;
     }
     case CommandMode::kRatesThrottle: {
@@ -611,7 +689,7 @@ ControlGoal UpdateCommand(Ctx& c, double t, double h) {
       g.vertical = V::kPosition;
       g.rates = k.rates;
       g.position = Vec3(0, 0, k.z);
-      g.closing_gain_z = ds.controller.gains.altitude_gain;
+      g.closing_gain_z = AltitudeGain(p, ds);
       return g;
     }
     case CommandMode::kPwm: {
@@ -759,7 +837,7 @@ void Step(const World& model, WorldState* state, const Commands& commands, const
       const double t = t0 + k * h;
       const ControlGoal goal = UpdateCommand(ctx, t, h);
       std::array<double, kMaxRotors> motors{};
-      const KinematicsView kv{ds.position, ds.orientation, ds.velocity, ds.angular_velocity};
+      const KinematicsView kv{ds.position, ds.orientation, ds.velocity, ds.angular_velocity, ds.grounded};
       ControllerUpdate(dm.params, dm.derived, goal, kv, model.gravity, density_ratio, h, &ds.controller, &motors);
       for (int r = 0; r < kMaxRotors; ++r) ds.rotors[r].command = motors[r];
       const std::uint64_t resets = ds.reset_count;
@@ -809,15 +887,74 @@ std::uint64_t StateHash(const WorldState& state) {
     }
   };
   auto mixd = [&](double v) { mix(&v, sizeof v); };
+  auto mixv = [&](const Vec3& v) {
+    for (int i = 0; i < 3; ++i) mixd(v[i]);
+  };
+  auto mixb = [&](bool b) {
+    const unsigned char c = b ? 1 : 0;
+    mix(&c, 1);
+  };
+  mix(&state.frame, sizeof state.frame);
+  mixd(state.time);
   for (const DroneState& d : state.drones) {
     mix(&d.id, sizeof d.id);
-    for (int i = 0; i < 3; ++i) {
-      mixd(d.position[i]);
-      mixd(d.velocity[i]);
-      mixd(d.angular_velocity[i]);
-    }
+    // Rigid body and rotors.
+    mixv(d.position);
+    mixv(d.velocity);
+    mixv(d.angular_velocity);
     for (int i = 0; i < 4; ++i) mixd(d.orientation.coeffs()[i]);
-    for (const RotorState& r : d.rotors) mixd(r.signal);
+    for (const RotorState& r : d.rotors) {
+      mixd(r.command);
+      mixd(r.signal);
+    }
+    mixb(d.armed);
+    mixb(d.grounded);
+    mix(&d.landed, sizeof d.landed);
+    mixd(d.last_support_time);
+    mixv(d.support_velocity);
+    for (const auto& t : d.touching) {
+      mix(&t.kind, sizeof t.kind);
+      mix(&t.id, sizeof t.id);
+      mixd(t.time);
+    }
+    mix(&d.collision.collision_count, sizeof d.collision.collision_count);
+    mix(&d.reset_count, sizeof d.reset_count);
+    // Controller memory and gains.
+    const ControllerState& cs = d.controller;
+    const ControllerGains& g = cs.gains;
+    for (const Vec3* v : {&g.angle_rate_p, &g.angle_rate_i, &g.angle_rate_d, &g.angle_level_p}) mixv(*v);
+    for (double v : {g.max_angle_rate, g.max_tilt, g.velocity_p_xy, g.velocity_i_xy, g.velocity_p_z, g.velocity_i_z,
+                     g.max_velocity, g.min_throttle, g.position_p_xy, g.position_p_z, g.integrator_limit, g.altitude_gain}) {
+      mixd(v);
+    }
+    mixd(cs.yaw_ref);
+    mixd(cs.vz_integral);
+    mixv(cs.vxy_integral);
+    mixv(cs.rate_integral);
+    mixv(cs.prev_rate_error);
+    mixb(cs.has_prev_rate_error);
+    // Active command (its body is summarised by its id, mode and reference state).
+    const ActiveCommand& ac = d.command;
+    mix(&ac.id, sizeof ac.id);
+    mix(&ac.mode, sizeof ac.mode);
+    mixb(ac.running);
+    const std::size_t body_index = ac.body.index();
+    mix(&body_index, sizeof body_index);
+    mixd(ac.start_time);
+    mixd(ac.end_time);
+    for (const Vec3& pt : ac.path) mixv(pt);
+    mixd(ac.s);
+    mixd(ac.s_dot);
+    mix(&ac.segment, sizeof ac.segment);
+    mixd(ac.speed);
+    mixd(ac.lookahead);
+    mixd(ac.adaptive_lookahead);
+    mixv(ac.velocity);
+    mixv(ac.target);
+    mixd(ac.landed_since);
+    // Turbulence and the random generator.
+    mixv(d.gust);
+    for (std::uint64_t w : d.rng.s) mix(&w, sizeof w);
   }
   return hsh;
 }

@@ -62,19 +62,24 @@ pid_t Spawn(const std::vector<std::string>& argv, const std::string& out_file = 
 // camera, with the steady-clock publication time (s) in sensor_pose.position.x (bench only).
 class BenchCamera final : public lockstep::ServiceCore {
  public:
-  explicit BenchCamera(lockstep::Bus& bus) : images_(bus, lockstep::topics::kImage) {}
+  explicit BenchCamera(lockstep::Bus& bus) : bus_(bus) {}
   std::vector<lockstep::msg::BlueprintDeclaration> Blueprints() const override {
     namespace bp = lockstep::blueprint;
     return {bp::Make("sensor.camera.rgb", lockstep::msg::ActorKind::ACTOR_SENSOR,
                      {bp::String("role_name", ""), bp::Int("image_size_x", 1280, 1, 3840), bp::Int("image_size_y", 720, 1, 2160)})};
   }
-  void BeginRun(const lockstep::msg::WorldInfo&) override { cameras_.clear(); }
+  void BeginRun(const lockstep::msg::WorldInfo&) override { images_.clear(); }
   bool StepNeverWaits() const override { return true; }
   void Step(const lockstep::msg::Tick& tick) override {
     for (const auto& c : tick.commands()) {
-      if (c.body()._d() == lockstep::msg::CommandKind::CMD_SPAWN_ACTOR) cameras_.insert(c.body().spawn_actor().actor());
+      if (c.body()._d() == lockstep::msg::CommandKind::CMD_SPAWN_ACTOR) {
+        const uint32_t id = c.body().spawn_actor().actor();
+        const std::string topic = lockstep::topics::ImageTopicName(id);  // one topic per camera
+        images_.emplace(id, lockstep::Writer<lockstep::msg::Image>(
+                                bus_, lockstep::Topic<lockstep::msg::Image>{topic.c_str(), lockstep::QosKind::kImage}));
+      }
     }
-    for (uint32_t id : cameras_) {
+    for (auto& [id, writer] : images_) {
       lockstep::msg::Image im;
       im.sensor(id);
       im.stamp().run(tick.run());
@@ -83,16 +88,16 @@ class BenchCamera final : public lockstep::ServiceCore {
       im.width(1280);
       im.height(720);
       im.step(1280 * 4);
-      im.encoding(lockstep::msg::ImageEncoding::IMAGE_BGRA8);
+      im.encoding(static_cast<uint32_t>(lockstep::msg::ImageEncoding::IMAGE_BGRA8));
       im.data().assign(1280 * 720 * 4, static_cast<uint8_t>(tick.frame()));
       im.sensor_pose().position().x(std::chrono::duration<double>(Clock::now().time_since_epoch()).count());
-      images_.Write(im);
+      writer.Write(im);
     }
   }
 
  private:
-  lockstep::Writer<lockstep::msg::Image> images_;
-  std::set<uint32_t> cameras_;
+  lockstep::Bus& bus_;
+  std::map<uint32_t, lockstep::Writer<lockstep::msg::Image>> images_;
 };
 
 }  // namespace

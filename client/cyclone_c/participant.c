@@ -198,6 +198,7 @@ static void send_ack(participant *p, uint64_t frame) {
   a.frame = frame;
   a.state_hash = p->last_hash;
   a.step_wall_us = 0;
+  a.replay_from = frame; /* it keeps no state a replacement would replay */
   dds_return_t rc = dds_write(p->ack_writer, &a);
   if (rc < 0) fprintf(stderr, "ack: %s\n", dds_strretcode(rc));
 }

@@ -137,6 +137,7 @@ struct Client::Impl {
   std::thread dispatcher;
   std::mutex reader_mu;             // creation of the sensor readers
   std::map<SensorType, std::shared_ptr<void>> sensor_readers;
+  std::map<uint32_t, std::shared_ptr<void>> image_readers;  // cameras: one topic each
 
   Writer<msg::Command> commands;
   // Readers last: their callbacks use everything above.
@@ -481,7 +482,11 @@ struct Client::Impl {
   void OnSensor(SensorType type, uint32_t sensor, const msg::FrameStamp& stamp, std::shared_ptr<const void> message) {
     {
       std::lock_guard<std::mutex> lock(mu);
-      if (!listeners.count(sensor)) return;
+      auto it = listeners.find(sensor);
+      if (it == listeners.end()) return;
+      // Camera topics keep their last images for late readers (TRANSIENT_LOCAL): frames up
+      // to the one the listener started after are not expected, so not delivered.
+      if (RunFrame{stamp.run(), stamp.frame()} <= it->second.start) return;
       SensorSample s;
       s.type = type;
       s.sensor = sensor;
@@ -500,11 +505,20 @@ struct Client::Impl {
     sensor_readers[type] = reader;
   }
 
-  void EnsureSensorReader(SensorType type) {
+  void EnsureSensorReader(SensorType type, uint32_t sensor) {
     std::lock_guard<std::mutex> lock(reader_mu);
+    if (type == SensorType::kImage) {
+      if (image_readers.count(sensor)) return;
+      const std::string name = topics::ImageTopicName(sensor);
+      image_readers[sensor] = std::make_shared<Reader<msg::Image>>(
+          *bus, Topic<msg::Image>{name.c_str(), QosKind::kImage}, [this](const msg::Image& m, const SampleInfo&) {
+            OnSensor(SensorType::kImage, m.sensor(), m.stamp(), std::make_shared<const msg::Image>(m));
+          });
+      return;
+    }
     if (sensor_readers.count(type)) return;
     switch (type) {
-      case SensorType::kImage: MakeSensorReader(type, topics::kImage); break;
+      case SensorType::kImage: break;
       case SensorType::kPointCloud: MakeSensorReader(type, topics::kPointCloud); break;
       case SensorType::kRadar: MakeSensorReader(type, topics::kRadar); break;
       case SensorType::kImu: MakeSensorReader(type, topics::kImu); break;
@@ -832,7 +846,7 @@ void Client::listen(uint32_t sensor, SensorCallback callback) {
   if (!SensorTypeOf(info->blueprint, &type)) {
     throw ClientError("listen(): actor " + std::to_string(sensor) + " (" + info->blueprint + ") is not a sensor");
   }
-  impl_->EnsureSensorReader(type);
+  impl_->EnsureSensorReader(type, sensor);
   std::lock_guard<std::mutex> lock(impl_->mu);
   Impl::Listener l;
   l.type = type;

@@ -96,8 +96,28 @@ std::string CommandProcessor::CheckDrone(const msg::DroneCommand& d) const {
   };
   switch (d.kind()) {
     case K::DRONE_MOVE_TO_POSITION:
-    case K::DRONE_GO_HOME:
+    case K::DRONE_MOVE_TO_Z:
       if (d.velocity() <= 0) return "velocity must be > 0 m/s";
+      return {};
+    case K::DRONE_GO_HOME:  // AirSim's goHome has no velocity: 0 = its 0.5 m/s
+      return {};
+    case K::DRONE_MOVE_TO_GPS:
+      if (auto r = need_values(3, "latitude/longitude/altitude"); !r.empty()) return r;
+      if (d.velocity() <= 0) return "velocity must be > 0 m/s";
+      return First(InRange("latitude", d.values()[0], -90, 90), InRange("longitude", d.values()[1], -180, 180));
+    case K::DRONE_MOVE_BY_ROLL_PITCH_YAWRATE_THROTTLE:
+      if (auto r = need_values(4, "this command"); !r.empty()) return r;
+      return InRange("throttle", d.values()[3], 0, 1);
+    case K::DRONE_MOVE_BY_ROLL_PITCH_YAWRATE_Z:
+    case K::DRONE_MOVE_BY_ANGLE_RATES_Z:
+      return need_values(4, "this command");
+    case K::DRONE_SET_WIND:
+      return InRange("wind speed", std::sqrt(d.target().x() * d.target().x() + d.target().y() * d.target().y() +
+                                             d.target().z() * d.target().z()), 0, 100);
+    case K::DRONE_SET_KINEMATICS:
+      if (d.values().size() != 4 && d.values().size() != 7 && d.values().size() != 10) {
+        return "set kinematics needs 4, 7 or 10 values (orientation w x y z, velocity, angular velocity)";
+      }
       return {};
     case K::DRONE_MOVE_ON_PATH:
       if (d.path().empty()) return "move on path needs at least one point";

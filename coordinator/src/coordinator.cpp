@@ -9,10 +9,12 @@
 #include <map>
 #include <mutex>
 #include <optional>
+#include <set>
 #include <sstream>
 
 #include "lockstep/coordinator/command_processor.h"
 #include "lockstep/coordinator/membership.h"
+#include "lockstep/coordinator/outbox.h"
 #include "lockstep/coordinator/tick_barrier.h"
 #include "lockstep/map/map.h"
 #include "lockstep/map/scene.h"
@@ -139,6 +141,11 @@ struct Coordinator::Impl {
   Writer<msg::Tick> tick_writer;
   Writer<msg::TickLog> tick_log_writer;
   std::vector<msg::Tick> log;  // completed ticks a replay cannot infer (see TickLog in clock.idl)
+  uint64_t log_first_frame = 0;  // ticks up to this frame are forgotten (TrimLog)
+  std::set<std::string> tick_logs_sent;  // services failed in this fault whose log went out
+  std::map<std::string, msg::ServiceSnapshot> snapshots;  // latest of each service (for its replacement)
+  Writer<msg::ServiceSnapshot> snapshot_writer;
+  Reader<msg::ServiceSnapshot> snapshot_reader;
   Writer<msg::WorldInfo> world_writer;
   Writer<msg::MapData> map_writer;
   Writer<msg::RunStatus> status_writer;
@@ -151,19 +158,12 @@ struct Coordinator::Impl {
   std::unique_lock<std::mutex>* main_lock = nullptr;  // the main loop's lock on `mu`, while it runs
   // DDS writes happen with `mu` released: a middleware thread may be waiting on
   // `mu` in a callback while a write needs that thread's progress.
-  std::vector<std::function<void()>> outbox;
+  OrderedOutbox outbox;
   template <class T>
   void Post(Writer<T>& w, T sample) {
-    outbox.push_back([&w, s = std::move(sample)] { w.Write(s); });
+    outbox.Post([&w, s = std::move(sample)] { w.Write(s); });
   }
-  void Flush(std::unique_lock<std::mutex>& lock) {
-    if (outbox.empty()) return;
-    std::vector<std::function<void()>> work;
-    work.swap(outbox);
-    lock.unlock();
-    for (auto& f : work) f();
-    lock.lock();
-  }
+  void Flush(std::unique_lock<std::mutex>& lock) { outbox.Flush(lock); }
 
   Reader<msg::Ack> ack_reader;
   Reader<msg::ServiceAnnounce> service_reader;
@@ -343,9 +343,13 @@ struct Coordinator::Impl {
       ms.required(m.required);
       ms.last_frame(m.last_frame);
       ms.last_step_wall_us(m.last_step_us);
+      ms.pid(m.pid);
+      ms.failure(m.failure.substr(0, 255));
+      if (m.run == run) ms.divergence(m.divergence.substr(0, 255));
       list.push_back(ms);
     }
     s.members(list);
+    s.diverged(Diverged(false));
     s.failed_service(failed_service);
     s.reason(failure_reason.substr(0, 511));
     Post(status_writer, s);
@@ -364,13 +368,66 @@ struct Coordinator::Impl {
     }
     l.frames(frame);
     l.ticks(log);
-    spdlog::info("tick log of {} frame(s) ({} kept) published for a replacement of '{}'", frame, log.size(), service);
+    l.first_frame(log_first_frame);
+    spdlog::info("tick log of {} frame(s) ({} kept, from frame {}) published for a replacement of '{}'", frame, log.size(),
+                 log_first_frame + 1, service);
     Post(tick_log_writer, std::move(l));
+    // The failed process's own snapshot went with it: give its replacement the copy.
+    if (auto it = snapshots.find(service); it != snapshots.end() && it->second.run() == run) {
+      Post(snapshot_writer, it->second);
+    }
+    tick_logs_sent.insert(service);
+  }
+
+  // A member of this run reported divergence (required ones only, for FrameDone).
+  bool Diverged(bool required_only) const {
+    for (const auto& [name, m] : members.members()) {
+      if (m.run == run && !m.divergence.empty() && (m.required || !required_only)) return true;
+    }
+    return false;
+  }
+
+  // Forgets the logged ticks no replacement needs: those up to the smallest replay_from of
+  // the required services (their latest snapshot; what the coordinator holds of it). The
+  // first kept tick is then the one after, written out in full, so replay infers from it.
+  void TrimLog() {
+    if (frame == 0) return;
+    uint64_t keep_after = frame - 1;  // the last completed tick stays: later ones are inferred from it
+    for (const auto& name : required_services) {
+      const Member* m = members.Find(name);
+      uint64_t from = m && m->run == run ? m->replay_from : 0;
+      if (m && m->last_hash != 0 && from != m->last_frame) {
+        // It rebuilds from a snapshot: only from one the coordinator holds a copy of (its
+        // newest may still be on the way here).
+        auto it = snapshots.find(name);
+        from = it != snapshots.end() && it->second.run() == run ? std::min(from, it->second.frame()) : 0;
+      }
+      keep_after = std::min(keep_after, from);
+    }
+    if (keep_after <= log_first_frame || log.empty()) return;
+    // Tick keep_after + 1 from the last logged tick at or before it, inferred as replay does.
+    size_t base = 0;
+    while (base + 1 < log.size() && log[base + 1].frame() <= keep_after + 1) ++base;
+    msg::Tick first = log[base];
+    while (first.frame() < keep_after + 1) {
+      first.commands({});
+      first.frame(first.frame() + 1);
+      first.sim_time(first.sim_time() + first.dt());
+    }
+    if (first.frame() != keep_after + 1) return;  // keep_after is beyond the completed frames
+    std::vector<msg::Tick> kept{first};
+    for (size_t i = base + 1; i < log.size(); ++i) {
+      if (log[i].frame() > keep_after + 1) kept.push_back(log[i]);
+    }
+    log.swap(kept);
+    log_first_frame = keep_after;
   }
 
   void SetState(RunState next) {
     if (next == state) return;
-    if (next == RunState::RUN_FAULTED && !failed_service.empty()) PublishTickLog(failed_service);
+    if (next == RunState::RUN_FAULTED && !failed_service.empty() && !tick_logs_sent.count(failed_service)) {
+      PublishTickLog(failed_service);
+    }
     // Synchronous mode goes ready -> running -> ready on every tick: keep that quiet.
     const bool routine = (state == RunState::RUN_READY && next == RunState::RUN_RUNNING) ||
                          (state == RunState::RUN_RUNNING && next == RunState::RUN_READY);
@@ -386,6 +443,9 @@ struct Coordinator::Impl {
     if (new_seed != 0) seed = new_seed;
     frame = 0;
     sim_time = 0;
+    members.NewRun(run);
+    log_first_frame = 0;
+    tick_logs_sent.clear();
     barrier.Close();
     commands.ResetActors();
     RegisterMapActors();
@@ -559,9 +619,11 @@ struct Coordinator::Impl {
     d.frame(frame);
     d.sim_time(sim_time);
     d.world_hash(barrier.WorldHash());
+    d.diverged(Diverged(true));
     barrier.Close();
     // Keep what a replay cannot infer: the first tick, ticks with commands, dt changes.
     if (log.empty() || !open_tick.commands().empty() || open_tick.dt() != log.back().dt()) log.push_back(open_tick);
+    TrimLog();
     done_pending = d;  // posted by PostDone, after the next tick when one follows at once
     const double us = std::chrono::duration<double, std::micro>(now - tick_sent).count();
     barrier_us_sum += us;
@@ -588,6 +650,7 @@ Coordinator::Coordinator(Bus& bus, LaunchConfig config) : impl_(std::make_unique
   s.done_writer = Writer<msg::FrameDone>(bus, topics::kFrameDone);
   s.reply_writer = Writer<msg::CommandReply>(bus, topics::kCommandReply);
   s.check_writer = Writer<msg::SpawnCheck>(bus, topics::kSpawnCheck);
+  s.snapshot_writer = Writer<msg::ServiceSnapshot>(bus, topics::kSnapshot);
   {
     std::unique_lock<std::mutex> lock(s.mu);
     s.PublishWorld();
@@ -598,6 +661,17 @@ Coordinator::Coordinator(Bus& bus, LaunchConfig config) : impl_(std::make_unique
   s.service_reader = Reader<msg::ServiceAnnounce>(bus, topics::kService,
                                                   [&s](const msg::ServiceAnnounce& a, const SampleInfo&) { s.OnAnnounce(a); });
   s.command_reader = Reader<msg::Command>(bus, topics::kCommand, [&s](const msg::Command& c, const SampleInfo&) { s.OnCommand(c); });
+  s.snapshot_reader = Reader<msg::ServiceSnapshot>(bus, topics::kSnapshot, [&s](const msg::ServiceSnapshot& snap, const SampleInfo& info) {
+    if (info.writer_id == s.snapshot_writer.id()) return;  // our own copy for a replacement
+    std::unique_lock<std::mutex> lock(s.mu);
+    if (snap.run() != s.run) return;
+    s.snapshots[snap.service().to_string()] = snap;
+    // A snapshot of a failed process that arrives after its tick log: pass it on too.
+    if (s.tick_logs_sent.count(snap.service().to_string())) {
+      s.Post(s.snapshot_writer, snap);
+      s.Flush(lock);
+    }
+  });
   s.blueprint_reader = Reader<msg::BlueprintSet>(bus, topics::kBlueprints,
                                                  [&s](const msg::BlueprintSet& b, const SampleInfo&) { s.OnBlueprints(b); });
   s.check_reply_reader = Reader<msg::SpawnCheckReply>(bus, topics::kSpawnCheckReply,
@@ -640,10 +714,22 @@ int Coordinator::Run(const std::atomic<bool>& stop) {
         spdlog::error("stopping the clock at frame {}: {}", s.frame, s.failure_reason);
         s.SetState(RunState::RUN_FAULTED);
       }
+      if (s.state == RunState::RUN_FAULTED) {
+        // Every required service that failed gets the log for its replacement, also one
+        // that fails while the run is already faulted.
+        for (const auto& [name, reason] : s.members.Missing()) {
+          const Member* m = s.members.Find(name);
+          if (m && !m->failure.empty() && !s.tick_logs_sent.count(name)) {
+            spdlog::error("service '{}' {} (the run is already faulted)", name, reason);
+            s.PublishTickLog(name);
+          }
+        }
+      }
     } else if (s.state == RunState::RUN_WAITING_FOR_SERVICES || s.state == RunState::RUN_FAULTED) {
       if (s.state == RunState::RUN_FAULTED) spdlog::info("all required services are back: resuming at frame {}", s.frame + 1);
       s.failed_service.clear();
       s.failure_reason.clear();
+      s.tick_logs_sent.clear();
       s.SetState(s.settings.synchronous_mode() ? RunState::RUN_READY : RunState::RUN_RUNNING);
       if (s.barrier.open()) s.SendOpenTick(now);
     }

@@ -1,5 +1,7 @@
 #include "lockstep/coordinator/membership.h"
 
+#include <cstdio>
+
 #include "lockstep/runtime/log.h"
 
 namespace lockstep {
@@ -38,7 +40,7 @@ bool Membership::OnAnnounce(const msg::ServiceAnnounce& a, Clock::time_point now
     m.failure.clear();
   } else {
     if (a.state() == msg::ServiceState::SERVICE_STOPPING && m.alive) {
-      m.failure = "stopped (announced shutdown)";
+      m.failure = a.reason().to_string().empty() ? "stopped (announced shutdown)" : "failed: " + a.reason().to_string();
       spdlog::warn("service '{}' {}", name, m.failure);
     }
     changed = changed || m.alive;
@@ -59,10 +61,36 @@ bool Membership::OnAck(const std::string& service, uint32_t current_run, const m
     m.failure.clear();
     changed = true;
   }
-  if (a.run() == current_run && a.frame() >= m.last_frame) {
+  if (a.run() != current_run) return changed;
+  if (m.run != current_run) {  // its first ack of this run: values of an older run go
+    m.run = current_run;
+    m.last_frame = 0;
+    m.last_hash = 0;
+    m.replay_from = 0;
+    m.divergence.clear();
+  }
+  if (a.frame() == m.last_frame && m.last_frame != 0 && m.last_hash != 0 && a.state_hash() != 0 &&
+      a.state_hash() != m.last_hash && m.divergence.empty()) {
+    // The same frame acked twice with different states (a replacement that did not rebuild
+    // what the failed process had): the run no longer follows its tick stream.
+    char why[160];
+    std::snprintf(why, sizeof why, "frame %llu acknowledged with state hash %016llx after %016llx",
+                  static_cast<unsigned long long>(a.frame()), static_cast<unsigned long long>(a.state_hash()),
+                  static_cast<unsigned long long>(m.last_hash));
+    m.divergence = why;
+    spdlog::error("service '{}' diverged in run {}: {}", service, current_run, m.divergence);
+    changed = true;
+  }
+  if (a.frame() >= m.last_frame) {
     m.last_frame = a.frame();
     m.last_hash = a.state_hash();
     m.last_step_us = a.step_wall_us();
+    m.replay_from = a.replay_from();
+  }
+  if (!a.divergence().to_string().empty() && m.divergence != a.divergence().to_string()) {
+    m.divergence = a.divergence().to_string();
+    spdlog::error("service '{}' diverged in run {}: {}", service, current_run, m.divergence);
+    changed = true;
   }
   return changed;
 }
@@ -103,6 +131,32 @@ void Membership::MarkStalled(const std::string& service, uint64_t frame) {
   it->second.alive = false;
   it->second.stalled_frame = frame;
   it->second.failure = "timed out on frame " + std::to_string(frame);
+}
+
+void Membership::NewRun(uint32_t run) {
+  for (auto& [name, m] : members_) {
+    m.run = run;
+    m.last_frame = 0;
+    m.last_hash = 0;
+    m.replay_from = 0;
+    m.divergence.clear();
+  }
+}
+
+std::vector<std::pair<std::string, std::string>> Membership::Missing() const {
+  std::vector<std::pair<std::string, std::string>> out;
+  for (const auto& name : required_) {
+    std::string why;
+    auto it = members_.find(name);
+    if (it != members_.end() && it->second.alive) continue;
+    if (it == members_.end()) {
+      why = "has not joined";
+    } else {
+      why = it->second.failure.empty() ? "has not announced ready" : it->second.failure;
+    }
+    out.emplace_back(name, why);
+  }
+  return out;
 }
 
 std::string Membership::FirstMissing(std::string* service) const {

@@ -19,6 +19,7 @@
 #include "lockstep/runtime/error.h"
 #include "lockstep/runtime/launch_config.h"
 #include "lockstep/runtime/log.h"
+#include "lockstep/runtime/shm_sweep.h"
 #include "supervisor.h"
 
 namespace {
@@ -28,7 +29,17 @@ void OnSignal(int) { g_stop = true; }
 
 std::string BinDir() { return std::filesystem::canonical("/proc/self/exe").parent_path().string(); }
 
+// Frees what earlier runs killed with SIGKILL left in /dev/shm; says so when it did.
+void SweepShm(bool quiet) {
+  const auto r = lockstep::runtime::SweepStaleShm();
+  if (!quiet || r.removed_files > 0)
+    std::printf("lockstep: removed %d stale Fast DDS shared-memory file(s), %.1f MiB\n", r.removed_files,
+                static_cast<double>(r.removed_bytes) / (1 << 20));
+  std::fflush(stdout);
+}
+
 int Up(const std::string& config_file, int domain) {
+  SweepShm(true);
   lockstep::LaunchConfig config = lockstep::LoadLaunchConfig(config_file);
   if (domain >= 0) config.domain_id = domain;
   const std::string bin = BinDir();
@@ -48,8 +59,30 @@ int Up(const std::string& config_file, int domain) {
   std::printf("lockstep: starting '%s' on DDS domain %d: coordinator + %zu service(s)\n", config.name.c_str(),
               config.domain_id, config.services.size());
   std::fflush(stdout);
-  lockstep::Supervisor supervisor(std::move(children));
-  return supervisor.Run(g_stop);
+  // A member the run reports failed while its process still runs is hung (stopped, or a
+  // step stuck while its heartbeat thread goes on): the supervisor replaces it.
+  auto bus = lockstep::CreateDdsBus({config.domain_id, config.qos_file, config.participant_profile, "lockstep-up"});
+  std::mutex mu;
+  std::optional<lockstep::msg::RunStatus> status;
+  lockstep::Reader<lockstep::msg::RunStatus> reader(*bus, lockstep::topics::kRunStatus,
+                                                     [&](const lockstep::msg::RunStatus& s, const lockstep::SampleInfo&) {
+                                                       std::lock_guard<std::mutex> lock(mu);
+                                                       status = s;
+                                                     });
+  auto hung = [&](const std::string& name, pid_t pid) -> std::optional<std::string> {
+    std::lock_guard<std::mutex> lock(mu);
+    if (!status) return std::nullopt;
+    for (const auto& m : status->members()) {
+      if (m.service().to_string() == name && m.pid() == pid && !m.alive() && !m.failure().to_string().empty()) {
+        return m.failure().to_string();
+      }
+    }
+    return std::nullopt;
+  };
+  lockstep::Supervisor supervisor(std::move(children), hung);
+  const int rc = supervisor.Run(g_stop);
+  SweepShm(true);  // what a hung service killed with SIGKILL left behind
+  return rc;
 }
 
 int Status(int domain, const std::string& profile, double wait_s, bool json) {
@@ -133,6 +166,9 @@ int main(int argc, char** argv) {
   auto* map = app.add_subcommand("map", "map tools (see lockstep-map --help)");
   map->prefix_command();
 
+  auto* clean_shm = app.add_subcommand(
+      "clean-shm", "remove the shared-memory files of Fast DDS participants that died without cleaning up");
+
   auto* python = app.add_subcommand("python", "run a Python script with the lockstep, carla and airsim packages");
   python->prefix_command();
 
@@ -145,13 +181,29 @@ int main(int argc, char** argv) {
     if (*status) return Status(status_domain, profile, wait_s, json);
     if (*map) {
       const std::string tool = BinDir() + "/lockstep-map";
-      std::vector<std::string> rest = map->remaining();
+      // lockstep-map reads its positionals by place: pass options (anywhere on our
+      // command line) after them. Every option but --json takes a value.
+      std::vector<std::string> rest, options;
+      const std::vector<std::string> given = map->remaining();
+      for (size_t i = 0; i < given.size(); ++i) {
+        if (given[i].rfind("--", 0) != 0) {
+          rest.push_back(given[i]);
+          continue;
+        }
+        options.push_back(given[i]);
+        if (given[i] != "--json" && i + 1 < given.size()) options.push_back(given[++i]);
+      }
+      rest.insert(rest.end(), options.begin(), options.end());
       std::vector<char*> args{const_cast<char*>(tool.c_str())};
       for (auto& r : rest) args.push_back(r.data());
       args.push_back(nullptr);
       execv(tool.c_str(), args.data());
       std::fprintf(stderr, "lockstep map: cannot run %s\n", tool.c_str());
       return 127;
+    }
+    if (*clean_shm) {
+      SweepShm(false);
+      return 0;
     }
     if (*python) return RunPython(python->remaining());
   } catch (const std::exception& e) {

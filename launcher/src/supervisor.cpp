@@ -13,7 +13,7 @@
 
 namespace lockstep {
 
-Supervisor::Supervisor(std::vector<ChildSpec> children) {
+Supervisor::Supervisor(std::vector<ChildSpec> children, HangCheck hung) : hung_(std::move(hung)) {
   for (auto& spec : children) {
     name_width_ = std::max(name_width_, spec.name.size());
     Child c;
@@ -46,6 +46,21 @@ void Supervisor::Start(Child& c) {
   fcntl(fds[0], F_SETFL, O_NONBLOCK);
   c.pid = pid;
   c.out_fd = fds[0];
+  c.killed = false;
+}
+
+void Supervisor::KillHung() {
+  if (!hung_) return;
+  for (auto& c : children_) {
+    if (c.pid <= 0 || c.killed || c.spec.is_coordinator || !c.spec.restart_on_failure) continue;
+    if (auto why = hung_(c.spec.name, c.pid)) {
+      std::printf("%-*s | hung (%s): killing pid %d to replace it\n", static_cast<int>(name_width_), c.spec.name.c_str(),
+                  why->c_str(), static_cast<int>(c.pid));
+      std::fflush(stdout);
+      kill(c.pid, SIGKILL);
+      c.killed = true;
+    }
+  }
 }
 
 void Supervisor::Drain(Child& c, bool all) {
@@ -110,6 +125,7 @@ int Supervisor::Run(const std::atomic<bool>& stop) {
     }
     poll(fds.data(), fds.size(), 100);
     for (auto& c : children_) Drain(c, false);
+    KillHung();
     // Reap children that ended.
     bool done = false;
     for (auto& c : children_) {
@@ -123,7 +139,7 @@ int Supervisor::Run(const std::atomic<bool>& stop) {
         std::printf("%-*s | exited with %d\n", static_cast<int>(name_width_), c.spec.name.c_str(), code);
         exit_code = code;
         done = true;
-      } else if (code != 0 && c.spec.restart_on_failure && c.restarts < 5) {
+      } else if ((code != 0 || c.killed) && c.spec.restart_on_failure && c.restarts < 5) {
         ++c.restarts;
         std::printf("%-*s | failed (%d): starting a replacement (%d of 5)\n", static_cast<int>(name_width_),
                     c.spec.name.c_str(), code, c.restarts);

@@ -4,6 +4,8 @@
 #include <sys/types.h>
 
 #include <atomic>
+#include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,9 +18,15 @@ struct ChildSpec {
   bool is_coordinator = false;
 };
 
+// Why the run reports the service `name` (process `pid`) failed while its process still
+// runs (a hang: no heartbeat, or a step that never finishes); nullopt if it does not.
+using HangCheck = std::function<std::optional<std::string>(const std::string& name, pid_t pid)>;
+
 class Supervisor {
  public:
-  explicit Supervisor(std::vector<ChildSpec> children);
+  // `hung`: restart-on-failure services it reports are killed (SIGKILL) and replaced
+  // like a crashed one.
+  explicit Supervisor(std::vector<ChildSpec> children, HangCheck hung = {});
   ~Supervisor();
   // Runs until the coordinator exits, a child fails hard, or `stop` is set. Returns the
   // launcher's exit code: 0 when the coordinator finished normally.
@@ -31,11 +39,14 @@ class Supervisor {
     int out_fd = -1;
     std::string pending;  // partial line
     int restarts = 0;
+    bool killed = false;  // killed as hung; its exit is then a failure
   };
   void Start(Child& c);
   void Drain(Child& c, bool all);
   void StopAll();
+  void KillHung();
   std::vector<Child> children_;
+  HangCheck hung_;
   size_t name_width_ = 0;
 };
 

@@ -88,7 +88,8 @@ struct TopicState {
   std::mutex mu;
   std::string type_name;
   std::vector<std::shared_ptr<ReaderSlot>> readers;
-  std::map<uint64_t, std::deque<std::shared_ptr<Sample>>> history;  // per writer id
+  // Per writer id and instance key (all zero for keyless types), as DDS keeps it.
+  std::map<std::pair<uint64_t, std::array<uint8_t, 16>>, std::deque<std::shared_ptr<Sample>>> history;
   int writers = 0;
 };
 
@@ -128,7 +129,7 @@ class InProcWriter final : public RawWriter {
     {
       std::lock_guard<std::mutex> lock(topic_->mu);
       --topic_->writers;
-      topic_->history.erase(id_);
+      std::erase_if(topic_->history, [&](const auto& e) { return e.first.first == id_; });
     }
     for (auto& r : Snapshot(*topic_)) r->WriterGone(id_);
   }
@@ -137,7 +138,9 @@ class InProcWriter final : public RawWriter {
     // Under the topic lock, so a reader joining now gets it either as history or live.
     std::lock_guard<std::mutex> lock(topic_->mu);
     if (QosTransientLocal(qos_)) {
-      auto& h = topic_->history[id_];
+      std::array<uint8_t, 16> key{};
+      if (ops_.key) ops_.key(sample, &key);
+      auto& h = topic_->history[{id_, key}];
       h.push_back(copy);
       while (static_cast<int>(h.size()) > QosHistoryDepth(qos_)) h.pop_front();
     }
@@ -192,8 +195,8 @@ class InProcessBus final : public Bus {
     {
       std::lock_guard<std::mutex> lock(t->mu);
       if (QosTransientLocal(qos)) {
-        for (auto& [writer, samples] : t->history) {
-          for (auto& s : samples) slot->Deliver(s, writer);
+        for (auto& [instance, samples] : t->history) {
+          for (auto& s : samples) slot->Deliver(s, instance.first);
         }
       }
       t->readers.push_back(slot);

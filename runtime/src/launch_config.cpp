@@ -1,6 +1,7 @@
 #include "lockstep/runtime/launch_config.h"
 
 #include <algorithm>
+#include <cstdlib>
 #include <filesystem>
 #include <cmath>
 #include <map>
@@ -135,12 +136,21 @@ ScheduledCommand LoadStep(YamlMap m, uint64_t index) {
     m.Require("as", &s.alias);
     msg::Vector3 at;
     if (YAML::Node n = m.Child("at")) at = Vec(m, "at", n);
-    double yaw = 0;  // rad, ENU heading
+    double yaw = 0, pitch = 0;  // rad: ENU heading; nose up (cameras)
     m.Get("yaw", &yaw);
+    m.Get("pitch", &pitch);
     std::map<std::string, std::string> attrs;
     m.Get("attributes", &attrs);
-    m.Get("parent", &s.actor_alias);  // attach to this actor (by alias): `at` and `yaw` are then relative to it
-    body = SpawnBody(spawn, MakePose(at.x(), at.y(), at.z(), yaw), AttributeList(attrs.begin(), attrs.end()));
+    m.Get("parent", &s.actor_alias);  // attach to this actor (by alias): `at`, `yaw` and `pitch` are then relative to it
+    msg::Pose pose = MakePose(at.x(), at.y(), at.z(), yaw);
+    if (pitch != 0) {  // yaw about z, then pitch about the new y (nose up = negative rotation about y)
+      const double cy = std::cos(yaw / 2), sy = std::sin(yaw / 2), cp = std::cos(-pitch / 2), sp = std::sin(-pitch / 2);
+      pose.orientation().w(cy * cp);
+      pose.orientation().x(-sy * sp);
+      pose.orientation().y(cy * sp);
+      pose.orientation().z(sy * cp);
+    }
+    body = SpawnBody(spawn, pose, AttributeList(attrs.begin(), attrs.end()));
   } else if (m.Get("autopilot", &autopilot)) {
     m.Require("actor", &s.actor_alias);
     msg::TrafficManagerCommand tm;
@@ -230,8 +240,23 @@ LaunchConfig ParseLaunchConfig(const std::string& yaml_text, const std::string& 
   return Load(LoadYamlString(yaml_text, source_name), source_name);
 }
 
+std::string BuildDir() {
+  if (const char* env = std::getenv("LOCKSTEP_BUILD_DIR"); env && *env) return env;
+  std::error_code ec;
+  const auto exe = std::filesystem::canonical("/proc/self/exe", ec);
+  return ec ? std::string("build") : exe.parent_path().parent_path().string();  // build/bin/<program>
+}
+
+std::string ExpandBuildDir(const std::string& path) {
+  const std::string var = "${LOCKSTEP_BUILD_DIR}";
+  const size_t at = path.find(var);
+  return at == std::string::npos ? path : path.substr(0, at) + BuildDir() + path.substr(at + var.size());
+}
+
 LaunchConfig LoadLaunchConfig(const std::string& file) {
   LaunchConfig c = Load(LoadYamlFile(file), file);
+  c.map = ExpandBuildDir(c.map);
+  c.output_dir = ExpandBuildDir(c.output_dir);
   // Paths in a config are relative to the config file.
   const std::filesystem::path dir = std::filesystem::path(file).parent_path();
   if (!c.map.empty() && std::filesystem::path(c.map).is_relative()) c.map = (dir / c.map).lexically_normal().string();

@@ -2,6 +2,9 @@
 // PubSubTypes (and through them Fast DDS headers).
 #include "lockstep/runtime/messages.h"
 
+#include <algorithm>
+#include <iterator>
+
 #include "lockstep/msg/blueprintPubSubTypes.h"
 #include "lockstep/msg/clockPubSubTypes.h"
 #include "lockstep/msg/commandPubSubTypes.h"
@@ -24,6 +27,13 @@ namespace lockstep {
         [](void* p) { delete static_cast<msg::T*>(p); },                                      \
         [](void* dst, const void* src) {                                                      \
           *static_cast<msg::T*>(dst) = *static_cast<const msg::T*>(src);                      \
+        },                                                                                    \
+        [](const void* sample, std::array<uint8_t, 16>* out) -> bool {                        \
+          thread_local msg::T##PubSubType type;                                               \
+          eprosima::fastrtps::rtps::InstanceHandle_t h;                                       \
+          if (!type.getKey(const_cast<void*>(sample), &h, false)) return false;               \
+          for (size_t i = 0; i < out->size(); ++i) (*out)[i] = h.value[i];                   \
+          return true;                                                                        \
         }};                                                                                   \
     return ops;                                                                               \
   }

@@ -11,6 +11,7 @@ const char* QosFamilyName(QosKind kind) {
     case QosKind::kState: return "state";
     case QosKind::kEvent: return "event";
     case QosKind::kSensor: return "sensor";
+    case QosKind::kImage: return "image";
   }
   return "unknown";
 }
@@ -24,13 +25,14 @@ int QosHistoryDepth(QosKind kind) {
     case QosKind::kCommand: return 256;
     case QosKind::kState: return 4;
     case QosKind::kEvent: return 64;
-    case QosKind::kSensor: return 2;
+    case QosKind::kSensor:
+    case QosKind::kImage: return 2;
   }
   return 1;
 }
 
 bool QosTransientLocal(QosKind kind) {
-  return kind == QosKind::kClock || kind == QosKind::kMembership || kind == QosKind::kState;
+  return kind == QosKind::kClock || kind == QosKind::kMembership || kind == QosKind::kState || kind == QosKind::kImage;
 }
 
 std::string DefaultQosFile() { return LOCKSTEP_DEFAULT_QOS_FILE; }

@@ -49,6 +49,11 @@ struct ServiceRunner::Impl {
   std::atomic<uint64_t> last_frame{0};
   uint64_t last_hash = 0;
   bool can_snapshot = true;
+  uint64_t snapshot_frame = 0;  // frame of our latest snapshot reported in acks (published or restored)
+  uint64_t published_snapshot = 0;  // our latest published snapshot: reported from the next ack on, so
+                                    // replay_from equals last_frame only for a service with no state
+  std::string divergence;       // why our state is not the one the tick stream defines (this run)
+  std::string failure;          // why the service stopped, if a step failed (guarded by mu)
   std::atomic<bool> joined{false};
 
   Writer<msg::Ack> ack;
@@ -73,6 +78,10 @@ struct ServiceRunner::Impl {
     a.host(host);
     a.last_frame(last_frame);
     a.blueprints(static_cast<uint32_t>(blueprints.size()));
+    if (state == msg::ServiceState::SERVICE_STOPPING) {
+      std::lock_guard<std::mutex> lock(mu);
+      a.reason(failure.substr(0, 255));
+    }
     announce.Write(a);
   }
 
@@ -116,6 +125,9 @@ struct ServiceRunner::Impl {
     a.frame(frame);
     a.state_hash(last_hash);
     a.step_wall_us(wall_us);
+    a.divergence(divergence.substr(0, 255));
+    // What a replacement would replay: after our snapshot; nothing if we keep no state.
+    a.replay_from(snapshot_frame != 0 ? snapshot_frame : (!can_snapshot && last_hash == 0 ? last_frame.load() : 0));
     ack.Write(a);
   }
 
@@ -133,6 +145,35 @@ struct ServiceRunner::Impl {
     s.state_hash(last_hash);
     s.state(std::move(state));
     snapshot_writer.Write(s);
+    published_snapshot = last_frame;
+  }
+
+  bool failed() {
+    std::lock_guard<std::mutex> lock(mu);
+    return !failure.empty();
+  }
+  void Fail(const std::string& why) {
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      if (failure.empty()) failure = "step failed at frame " + std::to_string(last_frame.load() + 1) + ": " + why;
+    }
+    cv.notify_all();
+  }
+
+  void Diverge(const std::string& why) {
+    spdlog::error("diverged: {}", why);
+    if (divergence.empty()) divergence = why;
+  }
+
+  void NewRun(const msg::WorldInfo& w) {
+    run = w.run();
+    core.BeginRun(w);
+    last_frame = 0;
+    last_hash = 0;
+    can_snapshot = true;
+    snapshot_frame = 0;
+    published_snapshot = 0;
+    divergence.clear();
   }
 
   // Waits for world info of `wanted_run` (0 = any).
@@ -141,7 +182,7 @@ struct ServiceRunner::Impl {
     const Clock::time_point deadline =
         Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(options.world_info_timeout_s));
     while (!stop) {
-      if (world && (wanted_run == 0 || world->run() == wanted_run)) return *world;
+      if (world && world->run() >= wanted_run) return *world;  // a newer run supersedes the one wanted
       if (cv.wait_until(lock, std::min<Clock::time_point>(deadline, Clock::now() + std::chrono::milliseconds(100))) ==
               std::cv_status::timeout &&
           Clock::now() >= deadline) {
@@ -154,9 +195,7 @@ struct ServiceRunner::Impl {
 
   // Join: restore from our last snapshot when the run is already under way.
   void Join(const std::atomic<bool>& stop) {
-    msg::WorldInfo w = WaitWorld(0, stop);
-    run = w.run();
-    core.BeginRun(w);
+    NewRun(WaitWorld(0, stop));
     std::optional<msg::Tick> current;
     std::optional<msg::ServiceSnapshot> snap;
     {
@@ -168,29 +207,49 @@ struct ServiceRunner::Impl {
       auto tick_known = [&] { return !ticks.empty() && ticks.back().run() == run; };
       cv.wait_until(lock, std::min<Clock::time_point>(deadline, Clock::now() + std::chrono::seconds(2)),
                     [&] { return stop || status_known(); });
-      if (status_known() && status->frame() > 0) {
+      // Under way: frames done, or a first tick out (a status from before the latest may
+      // still show frame 0 while running).
+      if (status_known() && (status->frame() > 0 || status->state() == msg::RunState::RUN_RUNNING ||
+                             status->state() == msg::RunState::RUN_FAULTED)) {
         cv.wait_until(lock, deadline, [&] { return stop || tick_known(); });
       }
       if (!ticks.empty() && ticks.back().run() == run) current = ticks.back();
-      if (snapshot && snapshot->run() == run) snap = snapshot;
     }
     if (current && current->frame() > 1) {
-      // The run is under way: take over at our snapshot if there is one, else rebuild
-      // the state by replaying the run's ticks (published by the coordinator when the
-      // service we replace failed).
+      // The run is under way: take over at our snapshot (the coordinator keeps a copy of
+      // the last one of the process we replace), then replay the run's ticks after it
+      // (published by the coordinator when that process failed).
+      std::optional<msg::TickLog> log = WaitTickLog(current->frame() - 1, stop);
+      // Take over after the last completed frame: the open tick, or the one after the log's.
+      const uint64_t to = log ? std::max<uint64_t>(log->frames(), current->frame() - 1) : current->frame() - 1;
+      {
+        // A log that forgot ticks needs a snapshot at least as new: wait for its copy.
+        std::unique_lock<std::mutex> lock(mu);
+        auto usable = [&] {
+          return snapshot && snapshot->run() == run && snapshot->frame() <= to &&
+                 (!log || snapshot->frame() >= log->first_frame());
+        };
+        if (log && log->first_frame() > 0) cv.wait_for(lock, std::chrono::seconds(5), [&] { return stop || usable(); });
+        if (usable()) snap = snapshot;
+      }
       uint64_t restored = 0;
-      if (snap && snap->frame() < current->frame()) {
+      if (snap) {
         core.RestoreState(snap->state());
         restored = snap->frame();
+        snapshot_frame = published_snapshot = restored;
         spdlog::info("restored the snapshot of frame {}", restored);
       }
-      if (std::optional<msg::TickLog> log = WaitTickLog(current->frame() - 1, stop)) {
-        restored = Replay(*log, restored, current->frame() - 1);
-      } else if (restored == 0) {
-        spdlog::warn("no snapshot and no tick log: joining run {} at frame {} without its past",
-                     run.load(), current->frame() - 1);
+      if (log && log->first_frame() <= restored) {
+        restored = Replay(*log, restored, to);
+      } else if (log) {
+        Diverge("the tick log starts after frame " + std::to_string(log->first_frame()) + " and no snapshot of frame " +
+                std::to_string(log->first_frame()) + " or later is here: joined run " + std::to_string(run.load()) +
+                " at frame " + std::to_string(to) + " without its past");
+      } else if (restored < to) {
+        Diverge("no tick log: joined run " + std::to_string(run.load()) + " at frame " + std::to_string(to) +
+                " without its past" + (restored ? " (snapshot of frame " + std::to_string(restored) + ")" : std::string()));
       }
-      last_frame = current->frame() - 1;
+      last_frame = to;
       last_hash = core.StateHash();
     } else if (current) {
       last_frame = current->frame() - 1;
@@ -222,7 +281,7 @@ struct ServiceRunner::Impl {
     const auto& kept = log.ticks();
     size_t next = 0;
     msg::Tick tick;
-    for (uint64_t f = 1; f <= to; ++f) {
+    for (uint64_t f = std::max<uint64_t>(1, log.first_frame() + 1); f <= to; ++f) {
       if (next < kept.size() && kept[next].frame() == f) {
         tick = kept[next++];
       } else {  // inferred: no commands, dt unchanged
@@ -240,8 +299,11 @@ struct ServiceRunner::Impl {
       if (hash == log.last_hash()) {
         spdlog::info("rebuilt frame {} by replaying {} tick(s): state hash {:016x} matches", to, n, hash);
       } else {
-        spdlog::error("replayed {} tick(s) to frame {} but the state hash {:016x} differs from the acknowledged {:016x}",
-                      n, to, hash, log.last_hash());
+        char why[200];
+        std::snprintf(why, sizeof why, "replayed %llu tick(s) to frame %llu but the state hash %016llx differs from the acknowledged %016llx",
+                      static_cast<unsigned long long>(n), static_cast<unsigned long long>(to), static_cast<unsigned long long>(hash),
+                      static_cast<unsigned long long>(log.last_hash()));
+        Diverge(why);
       }
     } else {
       spdlog::info("rebuilt frame {} by replaying {} tick(s)", to, n);
@@ -250,26 +312,30 @@ struct ServiceRunner::Impl {
   }
 
   void Handle(const msg::Tick& tick, const std::atomic<bool>& stop) {
+    if (tick.run() < run) return;  // a tick of a run already superseded
     if (tick.run() != run) {
       msg::WorldInfo w = WaitWorld(tick.run(), stop);
-      run = w.run();
-      core.BeginRun(w);
-      last_frame = 0;
-      last_hash = 0;
-      can_snapshot = true;
+      if (w.run() != tick.run()) {
+        // Two quick resets: this tick's run is over before it began here. Skip it; the
+        // newest run's ticks follow.
+        spdlog::info("skipping tick {} of run {}: run {} superseded it", tick.frame(), tick.run(), w.run());
+        return;
+      }
+      NewRun(w);
     }
     if (tick.frame() <= last_frame) {
       SendAck(tick.frame(), 0);  // a re-sent tick we already did: ack again, idempotent
       return;
     }
     if (tick.frame() != last_frame + 1) {
-      spdlog::warn("tick {} arrived after frame {}: {} frame(s) missed; stepping on from here",
-                   tick.frame(), last_frame.load(), tick.frame() - last_frame - 1);
+      Diverge("tick " + std::to_string(tick.frame()) + " arrived after frame " + std::to_string(last_frame.load()) + ": " +
+              std::to_string(tick.frame() - last_frame - 1) + " frame(s) missed");
     }
     const auto t0 = Clock::now();
     core.Step(tick);
     last_frame = tick.frame();
     last_hash = core.StateHash();
+    snapshot_frame = published_snapshot;
     PublishSnapshot();
     const double us = std::chrono::duration<double, std::micro>(Clock::now() - t0).count();
     SendAck(tick.frame(), us);
@@ -295,8 +361,11 @@ ServiceRunner::ServiceRunner(Bus& bus, ServiceOptions options, ServiceCore& core
   });
   s.snapshot_reader = Reader<msg::ServiceSnapshot>(bus, topics::kSnapshot, [&s](const msg::ServiceSnapshot& snap, const SampleInfo& info) {
     if (snap.service() != s.options.name || info.writer_id == s.snapshot_writer.id()) return;
-    std::lock_guard<std::mutex> lock(s.mu);
-    s.snapshot = snap;
+    {
+      std::lock_guard<std::mutex> lock(s.mu);
+      s.snapshot = snap;
+    }
+    s.cv.notify_all();
   });
   s.status_reader = Reader<msg::RunStatus>(bus, topics::kRunStatus, [&s](const msg::RunStatus& st, const SampleInfo&) {
     {
@@ -307,6 +376,7 @@ ServiceRunner::ServiceRunner(Bus& bus, ServiceOptions options, ServiceCore& core
   });
   s.tick_log_reader = Reader<msg::TickLog>(bus, topics::kTickLog, [&s](const msg::TickLog& log, const SampleInfo&) {
     spdlog::debug("tick log of run {} for '{}': {} tick(s)", log.run(), log.service().to_string(), log.ticks().size());
+    if (log.service() != s.options.name) return;  // another failed service's
     {
       std::lock_guard<std::mutex> lock(s.mu);
       s.tick_log = log;
@@ -332,7 +402,14 @@ ServiceRunner::ServiceRunner(Bus& bus, ServiceOptions options, ServiceCore& core
       }
       if (!queued) {
         static const std::atomic<bool> never_stop{false};
-        s.Handle(t, never_stop);
+        try {
+          if (s.failed()) return;
+          s.Handle(t, never_stop);
+        } catch (const std::exception& e) {
+          s.Fail(e.what());  // on the DDS thread: the main loop ends Run with the reason
+        } catch (...) {
+          s.Fail("unknown exception");
+        }
         return;
       }
     }
@@ -350,6 +427,7 @@ ServiceRunner::ServiceRunner(Bus& bus, ServiceOptions options, ServiceCore& core
 ServiceRunner::~ServiceRunner() {
   try {
     impl_->Announce(msg::ServiceState::SERVICE_STOPPING);
+    if (impl_->failed()) impl_->announce.WaitForAcknowledgments(1.0);  // the reason must get out before we exit
   } catch (...) {
   }
 }
@@ -377,7 +455,9 @@ void ServiceRunner::Run(const std::atomic<bool>& stop) {
       std::optional<msg::Tick> tick;
       {
         std::unique_lock<std::mutex> lock(s.mu);
-        s.cv.wait_for(lock, std::chrono::milliseconds(100), [&] { return !s.ticks.empty() || !s.checks.empty() || stop; });
+        s.cv.wait_for(lock, std::chrono::milliseconds(100),
+                      [&] { return !s.ticks.empty() || !s.checks.empty() || !s.failure.empty() || stop; });
+        if (!s.failure.empty()) throw ServiceFailed(s.failure);
         if (s.ticks.empty()) {
           if (s.checks.empty()) continue;
           lock.unlock();
@@ -389,7 +469,15 @@ void ServiceRunner::Run(const std::atomic<bool>& stop) {
         s.ticks.pop_front();
       }
       std::lock_guard<std::mutex> step(s.step_mu);
-      s.Handle(*tick, stop);
+      try {
+        s.Handle(*tick, stop);
+      } catch (const Stopped&) {
+        throw;
+      } catch (const std::exception& e) {
+        s.Fail(e.what());
+        std::lock_guard<std::mutex> lock(s.mu);
+        throw ServiceFailed(s.failure);
+      }
       s.AnswerChecks();
     }
   } catch (const Stopped&) {
@@ -398,6 +486,8 @@ void ServiceRunner::Run(const std::atomic<bool>& stop) {
     heartbeat_stop = true;
     s.heartbeat_cv.notify_all();
     heartbeat.join();
+    // A failed step: SERVICE_STOPPING with the reason, so the run faults at once.
+    if (s.failed()) s.Announce(msg::ServiceState::SERVICE_STOPPING);
     throw;
   }
   heartbeat_stop = true;

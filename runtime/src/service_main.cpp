@@ -37,13 +37,19 @@ int RunServiceMain(int argc, char** argv, const std::string& kind, bool percepti
       if (s.name == name) ctx.self = &s;
     }
     // Fast DDS 2.9's shared-memory transport can leave the port of a process killed with
-    // SIGKILL unusable, and a replacement that reopens it hears nothing (Fast DDS issue
-    // 5469). If no coordinator is heard within 10 s, join again with a new participant
-    // while the old one still holds that port, so the new one gets another.
+    // SIGKILL unusable: the next participant given the dead one's id reopens its port, the
+    // zombie cleanup deletes the segment the live writers still map, and it hears nothing
+    // (Fast DDS issue 5469, PR 4728). A replacement is exactly such a participant. So a
+    // short-lived placeholder participant takes the lowest free id first (the dead one's,
+    // if there is one) and ours gets another; the placeholder goes once ours exists.
+    // Should the port still be deaf (no coordinator heard within 10 s), join again with a
+    // new participant while the old one still holds its port.
     std::vector<std::unique_ptr<Bus>> stale;
     constexpr int kAttempts = 3;
     for (int attempt = 1;; ++attempt) {
+      auto placeholder = CreateDdsBus({ctx.config.domain_id, ctx.config.qos_file, ctx.config.participant_profile, name + "-placeholder"});
       auto bus = CreateDdsBus({ctx.config.domain_id, ctx.config.qos_file, ctx.config.participant_profile, name});
+      placeholder.reset();
       ctx.bus = bus.get();
       std::unique_ptr<ServiceCore> core = make_core(ctx);
       try {

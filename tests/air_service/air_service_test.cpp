@@ -14,6 +14,7 @@
 #include "lockstep/coordinator/coordinator.h"
 #include "lockstep/map/scene.h"
 #include "observer.h"
+#include "stand_in_blueprints.h"
 
 namespace lockstep {
 namespace {
@@ -128,6 +129,116 @@ TEST_F(AirServiceTest, TakesOffThroughTheWireAndReportsEveryFrame) {
   EXPECT_EQ(d.rotors().size(), 4u);
 }
 
+// The calls a MultirotorClient user has, on the wire, and getMultirotorState's extra fields.
+TEST_F(AirServiceTest, AirSimCallsOnTheWire) {
+  Start(true);
+  ASSERT_TRUE(observer_->WaitUntil([&] { return observer_->status() && observer_->status()->state() == msg::RunState::RUN_READY; }, 10s));
+  const uint32_t drone = SpawnDrone(4, 2);
+  using K = msg::DroneCommandKind;
+  EXPECT_TRUE(Drone(drone, K::DRONE_ARM, 1).accepted());
+  Tick(1);
+  {
+    auto s = WaitState(1);
+    ASSERT_TRUE(s);
+    const auto& d = s->drones()[0];
+    EXPECT_TRUE(d.ready());
+    EXPECT_TRUE(d.can_arm()) << "at rest on the ground";
+    EXPECT_EQ(d.timestamp(), 50000000u);  // ns, frame 1 at 0.05 s
+    EXPECT_EQ(d.collision().other_name().to_string(), "ground");
+  }
+  EXPECT_TRUE(Drone(drone, K::DRONE_TAKEOFF, 2).accepted());
+  Tick(100);
+  // moveToZ: 4 m up at 2 m/s, x, y kept.
+  EXPECT_TRUE(Drone(drone, K::DRONE_MOVE_TO_Z, 3, [](msg::DroneCommand& d) {
+                d.target().z(6.0);
+                d.velocity(2);
+              }).accepted());
+  Tick(100);
+  auto s = WaitState(201);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->drones()[0].command_status(), msg::DroneCommandStatus::DRONE_CMD_COMPLETED);
+  EXPECT_NEAR(s->drones()[0].transform().position().z(), 6.0, 0.2);
+  EXPECT_NEAR(s->drones()[0].transform().position().x(), 4.0, 0.2);
+  EXPECT_FALSE(s->drones()[0].can_arm()) << "flying";
+  // moveToGPS through the geo-reference (no map here: lat_0 = lon_0 = 0): 3 m east.
+  const air::GeoPoint goal = air::ToGeo(air::GeoReference{}, air::Vec3(7, 2, 6));
+  EXPECT_TRUE(Drone(drone, K::DRONE_MOVE_TO_GPS, 12, [&](msg::DroneCommand& d) {
+                d.values({goal.latitude, goal.longitude, goal.altitude});
+                d.velocity(2);
+              }).accepted());
+  Tick(80);
+  s = WaitState(281);
+  ASSERT_TRUE(s);
+  EXPECT_EQ(s->drones()[0].command_status(), msg::DroneCommandStatus::DRONE_CMD_COMPLETED);
+  EXPECT_NEAR(s->drones()[0].transform().position().x(), 7.0, 0.25);
+  EXPECT_NEAR(s->drones()[0].gps_location().longitude(), goal.longitude, 3e-6);
+  // moveByRollPitchYawrateZ: yaw rate 0.5 rad/s at 6 m; rates-Z and rpy-rate-throttle accepted.
+  EXPECT_TRUE(Drone(drone, K::DRONE_MOVE_BY_ROLL_PITCH_YAWRATE_Z, 4, [](msg::DroneCommand& d) {
+                d.values({0, 0, 0.5, 6.0});
+                d.duration(3);
+              }).accepted());
+  Tick(40);
+  s = WaitState(321);
+  ASSERT_TRUE(s);
+  EXPECT_NEAR(s->drones()[0].angular_velocity().z(), 0.5, 0.1);
+  EXPECT_EQ(s->drones()[0].command_status(), msg::DroneCommandStatus::DRONE_CMD_RUNNING);
+  EXPECT_FALSE(Drone(drone, K::DRONE_MOVE_BY_ANGLE_RATES_Z, 5, [](msg::DroneCommand& d) { d.values({0, 0}); }).accepted());
+  EXPECT_TRUE(Drone(drone, K::DRONE_MOVE_BY_ANGLE_RATES_Z, 6, [](msg::DroneCommand& d) {
+                d.values({0, 0, 0, 6.0});
+                d.duration(1);
+              }).accepted());
+  EXPECT_FALSE(Drone(drone, K::DRONE_MOVE_BY_ROLL_PITCH_YAWRATE_THROTTLE, 7, [](msg::DroneCommand& d) {
+                 d.values({0, 0, 0, 1.5});
+               }).accepted());
+  // simSetWind: a 10 m/s wind towards +x pushes the hovering drone downwind until the position
+  // loop leans it into the wind (a few degrees: the tilted bottom face, pi D^2 per rotor, also
+  // meets the wind).
+  s = WaitState(321);
+  ASSERT_TRUE(s);
+  const double x_before = s->drones()[0].transform().position().x();
+  auto pitch_of = [](const msg::DroneState& d) {
+    const auto& q = d.transform().orientation();
+    return std::asin(std::clamp(2 * (q.w() * q.y() - q.z() * q.x()), -1.0, 1.0));
+  };
+  EXPECT_TRUE(Drone(drone, K::DRONE_SET_WIND, 8, [](msg::DroneCommand& d) { d.target().x(10); }).accepted());
+  EXPECT_TRUE(Drone(drone, K::DRONE_HOVER, 9).accepted());
+  Tick(100);
+  s = WaitState(421);
+  ASSERT_TRUE(s);
+  const double hold_x = x_before;  // hover holds where it was (within the yaw manoeuvre's drift)
+  EXPECT_LT(pitch_of(s->drones()[0]), -0.01) << "nose up into the wind (FLU pitch < 0)";
+  EXPECT_GT(s->drones()[0].transform().position().x() - hold_x, 0.1) << "pushed downwind";
+  // The weather's wind: wind_intensity 100 = 10 m/s towards +x with seeded gusts; simSetWind off.
+  EXPECT_TRUE(Drone(drone, K::DRONE_SET_WIND, 11, [](msg::DroneCommand& d) { d.target().x(0); }).accepted());
+  EXPECT_TRUE(Drone(drone, K::DRONE_HOVER, 13).accepted());
+  Tick(20);
+  msg::WeatherParameters weather;
+  weather.wind_intensity(100);
+  msg::CommandBody wb;
+  wb.weather(weather);
+  EXPECT_TRUE(Send(wb).accepted());
+  Tick(100);
+  s = WaitState(541);
+  ASSERT_TRUE(s);
+  EXPECT_LT(pitch_of(s->drones()[0]), -0.01) << "leaning into the weather's wind";
+  // simSetKinematics: teleport with a velocity.
+  EXPECT_TRUE(Drone(drone, K::DRONE_SET_KINEMATICS, 10, [](msg::DroneCommand& d) {
+                d.target().x(20);
+                d.target().y(20);
+                d.target().z(10);
+                d.values({1, 0, 0, 0, 2, 0, 0});
+              }).accepted());
+  Tick(1);
+  s = WaitState(542);
+  ASSERT_TRUE(s);
+  EXPECT_NEAR(s->drones()[0].transform().position().x(), 20.0, 0.2);
+  EXPECT_NEAR(s->drones()[0].transform().position().z(), 10.0, 0.2);
+  // No map: the geo-reference is (0, 0); GPS follows the position.
+  EXPECT_GT(s->drones()[0].gps_location().longitude(), 0.0);
+  EXPECT_GT(s->drones()[0].gps_location().latitude(), 0.0);
+  EXPECT_NEAR(s->drones()[0].gps_location().altitude(), s->drones()[0].transform().position().z(), 1e-9);
+}
+
 TEST_F(AirServiceTest, BadDroneCommandsAreRejectedAndTheServiceKeepsTicking) {
   Start(true);
   ASSERT_TRUE(observer_->WaitUntil([&] { return observer_->status() && observer_->status()->state() == msg::RunState::RUN_READY; }, 10s));
@@ -198,6 +309,12 @@ TEST(AirServiceTown, DroneHitsABuildingOfTheMapPublishedOverDds) {
     std::lock_guard<std::mutex> lock(mu);
     last = s;
   });
+  // The drones' collisions for the sensors' collision sensor: one batch per frame.
+  std::map<uint64_t, msg::PhysicsEvents> physics;
+  Reader<msg::PhysicsEvents> physics_reader(*bus, topics::kPhysicsEvents, [&](const msg::PhysicsEvents& e, const SampleInfo&) {
+    std::lock_guard<std::mutex> lock(mu);
+    physics[e.stamp().frame()] = e;
+  });
   testing::Observer obs(*bus);
   Coordinator coordinator(*bus, c);
   AirService core(*bus);
@@ -265,8 +382,22 @@ TEST(AirServiceTown, DroneHitsABuildingOfTheMapPublishedOverDds) {
   const auto& d = last->drones().at(0);
   EXPECT_TRUE(d.collision().has_collided());
   EXPECT_EQ(d.collision().other_kind(), msg::ObjectKind::OBJECT_STATIC);
+  EXPECT_EQ(d.collision().other_name().to_string(), "static_1");
+  EXPECT_EQ(d.collision().other_id(), 1);
+  EXPECT_GE(d.collision().collision_count(), 1u);
   const double left = std::hypot(d.transform().position().x() - b.x, d.transform().position().y() - b.y);
   EXPECT_GT(left, std::min(b.width, b.depth) / 2 - 0.5) << "the drone must stay outside the walls";
+  ASSERT_TRUE(physics.count(300)) << "a PhysicsEvents batch every frame";
+  int hits = 0;
+  for (uint64_t f = 1; f <= 300; ++f) {
+    ASSERT_TRUE(physics.count(f)) << "no PhysicsEvents for frame " << f;
+    EXPECT_EQ(physics[f].service().to_string(), "air_sim");
+    for (const auto& col : physics[f].collisions()) {
+      EXPECT_EQ(col.actor(), spawn->actor());
+      hits += col.other_kind() == msg::ObjectKind::OBJECT_STATIC;
+    }
+  }
+  EXPECT_GE(hits, 1) << "the building hit as a PhysicsEvents collision";
 }
 
 }  // namespace
@@ -282,6 +413,8 @@ class CarOnlyGround final : public ServiceCore {
  public:
   explicit CarOnlyGround(Bus& bus) : writer_(bus, topics::kGroundState) {}
   void BeginRun(const msg::WorldInfo&) override {}
+  // It simulates vehicles: that (not its name) makes air_sim wait for its GroundState.
+  std::vector<msg::BlueprintDeclaration> Blueprints() const override { return testing::StandInBlueprints(); }
   void Step(const msg::Tick& tick) override {
     msg::GroundState g;
     g.stamp().run(tick.run());
@@ -312,7 +445,7 @@ TEST(AirServiceGround, ClientLandsADroneOnACarDrivingAtFiveMetresPerSecond) {
   LaunchConfig c;
   c.world.synchronous_mode(true);
   c.world.service_timeout(30);
-  c.services.push_back({"ground_sim", "car_only", "", {}, true, false, "never"});
+  c.services.push_back({"traffic", "car_only", "", {}, true, false, "never"});  // any name: found by its declarations
   c.services.push_back({"air_sim", "air_sim", "", {}, true, false, "never"});
   auto bus = CreateInProcessBus();
   std::mutex mu;
@@ -330,7 +463,7 @@ TEST(AirServiceGround, ClientLandsADroneOnACarDrivingAtFiveMetresPerSecond) {
   Coordinator coordinator(*bus, c);
   CarOnlyGround car(*bus);
   AirService drones(*bus);
-  ServiceRunner rg(*bus, ServiceOptions{"ground_sim", "car_only", false}, car);
+  ServiceRunner rg(*bus, ServiceOptions{"traffic", "car_only", false}, car);
   ServiceRunner ra(*bus, ServiceOptions{"air_sim", "air_sim", false}, drones);
   std::atomic<bool> stop{false};
   std::thread tg([&] { rg.Run(stop); });
@@ -378,7 +511,7 @@ TEST(AirServiceGround, ClientLandsADroneOnACarDrivingAtFiveMetresPerSecond) {
   drone(id, msg::DroneCommandKind::DRONE_ARM);
   drone(id, msg::DroneCommandKind::DRONE_TAKEOFF, [](msg::DroneCommand& d) { d.values({3.0}); });
   uint64_t frame = 0;
-  for (int i = 0; i < 80; ++i) tick(&frame);  // 4 s: up to 3 m
+  for (int i = 0; i < 160; ++i) tick(&frame);  // 8 s: up to 3 m at AirSim's 0.5 m/s
 
   // Follow the roof using only published states: target = car of this frame plus its
   // velocity (the service extrapolates it through the tick), first 1.5 m above the roof,

@@ -37,9 +37,12 @@ TEST(air_contact, RestsOnGroundAndIsLanded) {
 }
 
 TEST(air_contact, BounceRestitution) {
+  // landing_model: impulse (AirSim's ground lock off): a level drop bounces with restitution.
   Sim sim;
   sim.dt = 0.001;
-  sim.Add(1, NoDrag());
+  MultirotorParams p = NoDrag();
+  p.landing_model = LandingModel::kImpulse;
+  sim.Add(1, p);
   sim.D(1).position.z() += 1.0;
   double v_in = 0, v_out = 0;
   bool hit = false;
@@ -73,7 +76,9 @@ TEST(air_contact, FrictionStopsASlidingDrone) {
   // stops after v^2 / (2 mu g).
   Sim sim;
   sim.dt = 0.01;
-  sim.Add(1, NoDrag());
+  MultirotorParams p = NoDrag();
+  p.landing_model = LandingModel::kImpulse;  // ground lock would stop it at once
+  sim.Add(1, p);
   sim.Tick();
   sim.D(1).velocity = Vec3(2, 0, 0);
   const double x0 = sim.D(1).position.x();

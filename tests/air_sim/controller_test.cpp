@@ -56,7 +56,8 @@ TEST(air_controller, ControllerAloneLevelsTheDrone) {
   ControllerUpdate(p, d, g, k, 9.80665, 1.0, 0.001, &st, &m);
   EXPECT_LT(st.rate_goal.x(), 0);  // roll back
   EXPECT_GT(st.rate_goal.y(), 0);  // pitch back
-  EXPECT_NEAR(st.rate_goal.x(), -2.5 * 0.2, 0.03);
+  // AirSim's effective angle loop: clip(2.5 e, -1, 1) * max_angle_rate 2.5 rad/s.
+  EXPECT_NEAR(st.rate_goal.x(), -2.5 * 0.2 * 2.5, 0.05);
   double tau_x = 0;
   for (int i = 0; i < 4; ++i) tau_x += d.rotors[i].position.y() * m[i];
   EXPECT_LT(tau_x, 0);

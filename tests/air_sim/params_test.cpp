@@ -26,9 +26,10 @@ TEST(air_params, GenericQuadDerivedValuesMatchAirSim) {
   EXPECT_NEAR(d.max_torque_per_rotor, 0.0556, 0.0002);
   // Hover near 59 % throttle.
   EXPECT_NEAR(d.hover_throttle, 0.587, 0.005);
-  // Inertia: box of 0.78 kg + four 0.055 kg point masses at 0.2275 m, X layout.
+  // Inertia: box of 0.78 kg + four 0.055 kg point masses at 0.2275 m, X layout, 2.5 cm low.
   const double mb = 0.78, a = 0.2275 / std::sqrt(2.0);
-  const double ixx = mb / 12 * (0.11 * 0.11 + 0.04 * 0.04) + 4 * 0.055 * a * a;
+  const double rz = 0.025;  // hubs below the centre of mass
+  const double ixx = mb / 12 * (0.11 * 0.11 + 0.04 * 0.04) + 4 * 0.055 * (a * a + rz * rz);
   const double izz = mb / 12 * (0.18 * 0.18 + 0.11 * 0.11) + 4 * 0.055 * 0.2275 * 0.2275;
   EXPECT_NEAR(d.inertia(0, 0), ixx, 1e-12);
   EXPECT_NEAR(d.inertia(2, 2), izz, 1e-12);
@@ -45,9 +46,18 @@ TEST(air_params, GenericQuadDerivedValuesMatchAirSim) {
   EXPECT_NEAR(sr, 0, 1e-12);
   EXPECT_NEAR(sp, 0, 1e-12);
   EXPECT_NEAR(sy, 0, 1e-12);
-  // 6 body faces + 2 per rotor disc.
-  EXPECT_EQ(d.faces.size(), 6u + 8u);
-  EXPECT_NEAR(RestHeight(d), p.contact_radius, 1e-12);
+  // AirSim's six drag faces at +-body_box with the rotors folded in.
+  ASSERT_EQ(d.faces.size(), 6u);
+  const double pi = std::numbers::pi, dia = 0.2286, hgt = 0.01;
+  for (const DragFace& f : d.faces) {
+    const int axis = f.normal.x() != 0 ? 0 : (f.normal.y() != 0 ? 1 : 2);
+    const double expect[3] = {0.11 * 0.04 + 4 * pi * dia * hgt, 0.18 * 0.04 + 4 * pi * dia * hgt, 0.18 * 0.11 + 4 * pi * dia * dia};
+    EXPECT_NEAR(f.area, expect[axis], 1e-12);
+    EXPECT_TRUE(f.position.isApprox(f.normal * p.body_box[axis]));
+  }
+  // Hubs 2.5 cm below the centre of mass (AirSim rotor_z, FRD +0.025).
+  EXPECT_NEAR(d.rotors[0].position.z(), -0.025, 1e-12);
+  EXPECT_NEAR(RestHeight(d), p.contact_radius + 0.025, 1e-12);
 }
 
 TEST(air_params, HexaAndPlusLayouts) {

@@ -33,7 +33,7 @@ TEST(air_world, TenDronesFlyAtOnce) {
   }
 }
 
-std::vector<std::uint64_t> FlyScripted(std::uint64_t seed, double sigma) {
+std::vector<std::uint64_t> FlyScripted(std::uint64_t seed, double sigma, Vec3* end = nullptr) {
   Sim sim;
   sim.model.seed = seed;
   sim.env.turbulence_sigma = sigma;
@@ -50,6 +50,7 @@ std::vector<std::uint64_t> FlyScripted(std::uint64_t seed, double sigma) {
     sim.Tick();
     hashes.push_back(StateHash(sim.state));
   }
+  if (end != nullptr) *end = sim.D(2).position;
   return hashes;
 }
 
@@ -60,8 +61,10 @@ TEST(air_world, SameSeedAndCommandsGiveIdenticalTrajectories) {
   // The seed matters (turbulence is seeded per drone) ...
   const auto c = FlyScripted(8, 0.8);
   EXPECT_NE(a.back(), c.back());
-  // ... and without noise the seed does not.
-  EXPECT_EQ(FlyScripted(7, 0).back(), FlyScripted(8, 0).back());
+  // ... and without noise the seed changes only the generator state, not the flight.
+  Vec3 e7, e8;
+  EXPECT_NE(FlyScripted(7, 0, &e7).back(), FlyScripted(8, 0, &e8).back());
+  EXPECT_EQ(e7, e8);
 }
 
 TEST(air_world, NonFiniteStateResetsDroneAndRaisesEvent) {
@@ -89,7 +92,7 @@ TEST(air_world, NonFiniteStateResetsDroneAndRaisesEvent) {
   EXPECT_FALSE(sim.D(1).armed);
   EXPECT_EQ(sim.Status(m), CommandStatus::kCancelled);
   // Stepping continues; the other drone is unaffected; drone 1 can fly again.
-  sim.Run(3.0);
+  sim.Run(6.0);
   EXPECT_EQ(sim.Status(t2), CommandStatus::kCompleted);
   EXPECT_TRUE(sim.D(1).position.allFinite());
   sim.TakeOff(1);
@@ -268,6 +271,41 @@ TEST(air_world, DronesCollideWithEachOther) {
   const HeadOn s = FlyHeadOn(2, 1);
   EXPECT_EQ(r.a_pos, s.a_pos);
   EXPECT_EQ(r.b_pos, s.b_pos);
+}
+
+}  // namespace
+}  // namespace lockstep::air
+
+namespace lockstep::air {
+namespace {
+
+// Drone 2 flies at 6 m/s into hovering drone 1. Each sees the other at its tick-start pose
+// moved by its tick-start velocity, so both detect the contact at the same sub-step; a
+// hovering drone that saw the other frozen at its tick-start pose would notice it a tick late.
+TEST(air_world, BothDronesSeeTheirContactAtTheSameSubStep) {
+  Sim sim;
+  sim.Add(1, {}, Vec3(0, 0, 0));
+  sim.Add(2, {}, Vec3(-12, 0, 0));
+  sim.Send(1, cmd::Arm{});
+  sim.Send(2, cmd::Arm{});
+  sim.Send(1, cmd::Takeoff{});
+  sim.Send(2, cmd::Takeoff{});
+  sim.Run(7.0);
+  sim.Send(2, cmd::MoveByVelocity{Vec3(6, 0, 0), 5.0});
+  double t1 = -1, t2 = -1;
+  for (int i = 0; i < 100 && (t1 < 0 || t2 < 0); ++i) {
+    sim.Tick();
+    for (const AirEvent& e : sim.state.events) {
+      if (e.kind != EventKind::kCollision || e.object_kind != ObjectKind::kDrone) continue;
+      if (e.drone == 1 && t1 < 0) t1 = e.time;
+      if (e.drone == 2 && t2 < 0) t2 = e.time;
+    }
+  }
+  std::printf("contact seen by the hovering drone at %.4f s, by the moving one at %.4f s\n", t1, t2);
+  ASSERT_GT(t1, 0);
+  ASSERT_GT(t2, 0);
+  EXPECT_NEAR(t1, t2, 0.0025);
+  EXPECT_GT(sim.D(1).velocity.x(), 0.5) << "the hovering drone was pushed";
 }
 
 }  // namespace

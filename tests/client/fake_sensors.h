@@ -14,7 +14,7 @@ namespace lockstep::testing {
 class FakeSensors final : public ServiceCore {
  public:
   FakeSensors(Bus& bus, std::string name, uint64_t skip_frame = 0)
-      : name_(std::move(name)), skip_frame_(skip_frame), imu_(bus, topics::kImu), images_(bus, topics::kImage) {}
+      : bus_(bus), name_(std::move(name)), skip_frame_(skip_frame), imu_(bus, topics::kImu) {}
 
   std::vector<msg::BlueprintDeclaration> Blueprints() const override {
     namespace bp = lockstep::blueprint;
@@ -39,8 +39,13 @@ class FakeSensors final : public ServiceCore {
         bool late = false;
         for (const auto& a : s.attributes()) late |= a.key().to_string() == "role_name" && a.value().to_string() == "late";
         sensors_[s.actor()] = {bp == "sensor.camera.rgb", late};
+        if (bp == "sensor.camera.rgb") {  // a topic per camera, as the render service
+          const std::string topic = topics::ImageTopicName(s.actor());
+          images_[s.actor()] = Writer<msg::Image>(bus_, Topic<msg::Image>{topic.c_str(), QosKind::kImage});
+        }
       } else if (b._d() == msg::CommandKind::CMD_DESTROY_ACTOR) {
         sensors_.erase(b.destroy_actor().actor());
+        images_.erase(b.destroy_actor().actor());
       }
     }
     if (replaying()) return;
@@ -57,9 +62,9 @@ class FakeSensors final : public ServiceCore {
         im.width(8);
         im.height(4);
         im.step(32);
-        im.encoding(msg::ImageEncoding::IMAGE_BGRA8);
+        im.encoding(static_cast<uint32_t>(msg::ImageEncoding::IMAGE_BGRA8));
         im.data(std::vector<uint8_t>(128, static_cast<uint8_t>(tick.frame() & 0xff)));
-        images_.Write(im);
+        images_.at(id).Write(im);
       } else {
         msg::Imu m;
         m.sensor(id);
@@ -75,11 +80,12 @@ class FakeSensors final : public ServiceCore {
     bool camera = false;
     bool late = false;
   };
+  Bus& bus_;
   std::string name_;
   uint64_t skip_frame_;
   std::map<uint32_t, Sensor> sensors_;
   Writer<msg::Imu> imu_;
-  Writer<msg::Image> images_;
+  std::map<uint32_t, Writer<msg::Image>> images_;
 };
 
 }  // namespace lockstep::testing

@@ -384,12 +384,16 @@ class BoxCore : public NoopCore {
   void Step(const msg::Tick& tick) override {
     for (const auto& c : tick.commands()) {
       if (c.body()._d() != msg::CommandKind::CMD_SPAWN_ACTOR) continue;
-      std::lock_guard<std::mutex> lock(mu);
-      owners[c.body().spawn_actor().actor()] = c.body().spawn_actor().owner().to_string();
+      {
+        std::lock_guard<std::mutex> lock(mu);
+        owners[c.body().spawn_actor().actor()] = c.body().spawn_actor().owner().to_string();
+      }
+      cv.notify_all();
     }
     NoopCore::Step(tick);
   }
   std::mutex mu;
+  std::condition_variable cv;
   std::map<uint32_t, std::string> owners;  // spawned actor -> owner named in the tick
 };
 
@@ -423,6 +427,17 @@ TEST(BlueprintDeclarations, TheOwnerChecksASpawnBeforeTheSingleReplyAndLeavingTa
   std::thread t1([&] { r1.Run(stop); });
   std::thread t2([&] { r2->Run(stop_boxes); });
   std::thread tc([&] { coordinator.Run(stop); });
+  struct Join {  // also when an assertion returns early
+    std::atomic<bool>& stop;
+    std::atomic<bool>& stop_boxes;
+    std::vector<std::thread*> threads;
+    ~Join() {
+      stop = stop_boxes = true;
+      for (auto* t : threads) {
+        if (t->joinable()) t->join();
+      }
+    }
+  } join{stop, stop_boxes, {&t2, &tc, &t1}};
   auto boxes_alive = [&] {
     auto s = obs.status();
     if (!s) return false;
@@ -441,11 +456,17 @@ TEST(BlueprintDeclarations, TheOwnerChecksASpawnBeforeTheSingleReplyAndLeavingTa
   ASSERT_TRUE(ok);
   ASSERT_TRUE(ok->accepted()) << ok->reason();
   const uint32_t id = ok->actor();
-  ASSERT_TRUE(obs.WaitUntil([&] { return obs.last_frame() >= ok->frame(); }, 10s));
   {
-    std::lock_guard<std::mutex> lock(boxes.mu);
+    // boxes is not required (the barrier does not wait for it): wait for its step.
+    std::unique_lock<std::mutex> lock(boxes.mu);
+    ASSERT_TRUE(boxes.cv.wait_for(lock, 10s, [&] { return !boxes.owners.empty(); }));
     ASSERT_EQ(boxes.owners.size(), 1u) << "only the accepted spawn reaches the ticks";
     EXPECT_EQ(boxes.owners[id], "boxes") << "the tick names the owner";
+  }
+  ASSERT_TRUE(obs.WaitUntil([&] { return obs.last_frame() >= ok->frame() + 5; }, 10s));
+  {
+    std::lock_guard<std::mutex> lock(boxes.mu);
+    EXPECT_EQ(boxes.owners.size(), 1u) << "only the accepted spawn reaches the ticks";
   }
 
   stop_boxes = true;
@@ -456,9 +477,6 @@ TEST(BlueprintDeclarations, TheOwnerChecksASpawnBeforeTheSingleReplyAndLeavingTa
   ASSERT_TRUE(gone);
   EXPECT_FALSE(gone->accepted());
   EXPECT_NE(gone->reason().to_string().find("declared only by 'boxes', which is not alive"), std::string::npos) << gone->reason();
-  stop = true;
-  tc.join();
-  t1.join();
 }
 
 }  // namespace

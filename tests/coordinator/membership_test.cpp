@@ -119,5 +119,25 @@ TEST(Membership, AServiceIsAliveOnlyOnceItsDeclarationsArrived) {
   EXPECT_EQ(m.FirstMissing(&who), "");
 }
 
+// Issue 7, 2.2: last_frame used to survive a reset, so status and the replay check used
+// the previous run's values.
+TEST(Membership, ANewRunStartsEveryMembersFramesAgain) {
+  Membership m({"air"}, 600ms);
+  m.OnAnnounce(Announce("air", msg::ServiceState::SERVICE_READY, 10), Clock::now());
+  m.OnAck("air", 1, AckOf(1, 100, 0xabc));
+  EXPECT_EQ(m.Find("air")->last_frame, 100u);
+  m.NewRun(2);
+  EXPECT_EQ(m.Find("air")->last_frame, 0u);
+  EXPECT_EQ(m.Find("air")->last_hash, 0u);
+  m.OnAck("air", 2, AckOf(2, 5, 0xdef));
+  EXPECT_EQ(m.Find("air")->last_frame, 5u);
+  EXPECT_EQ(m.Find("air")->last_hash, 0xdefu);
+  m.OnAck("air", 2, AckOf(1, 101, 0x111));
+  EXPECT_EQ(m.Find("air")->last_frame, 5u) << "a late ack of the old run changes nothing";
+  // Without NewRun (another coordinator path), the first ack of a run still starts afresh.
+  m.OnAck("air", 3, AckOf(3, 1, 0x222));
+  EXPECT_EQ(m.Find("air")->last_frame, 1u);
+}
+
 }  // namespace
 }  // namespace lockstep

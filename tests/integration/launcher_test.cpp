@@ -178,5 +178,37 @@ TEST(Launcher, RestartOnFailureStartsAReplacementAndTheRunResumes) {
   EXPECT_EQ(*code, 0);
 }
 
+// Issue 7, 2.4: a hung service (SIGSTOP) used to leave `lockstep up` faulted for ever.
+TEST(Launcher, AHungServiceIsKilledAndReplacedLikeACrashedOne) {
+  Process up({Bin("lockstep"), "up", WriteTempFile("hang.yaml", NoopConfig("on-failure"))});
+  ASSERT_TRUE(WaitOutput(up, "waiting for services -> running", 30s)) << up.Output();
+  const pid_t fragile = JoinedPid(up.Output(), "fragile");
+  ASSERT_GT(fragile, 0);
+  kill(fragile, SIGSTOP);  // alive to the kernel, silent to the run
+  ASSERT_TRUE(WaitOutput(up, "fragile     | hung (sent no heartbeat", 20s)) << up.Output();
+  ASSERT_TRUE(WaitOutput(up, "starting a replacement (1 of 5)", 20s)) << up.Output();
+  ASSERT_TRUE(WaitOutput(up, "faulted -> running", 30s)) << up.Output();
+  EXPECT_GT(JoinedPid(up.Output(), "fragile", 1), 0) << "the replacement joined";
+  EXPECT_NE(kill(fragile, 0), 0) << "the hung process is gone";
+  up.Signal(SIGINT);
+  auto code = up.Wait(15s);
+  ASSERT_TRUE(code);
+  EXPECT_EQ(*code, 0) << up.Output();
+}
+
+// Issue 7, part 4: `lockstep map info --json FILE` used to fail (options had to follow the file).
+TEST(Launcher, MapToolsTakeOptionsAnywhere) {
+  const std::string town = SourceDir() + "/../shared/maps/carla/Town02.xodr";
+  for (const auto& args : {std::vector<std::string>{"map", "info", "--json", town}, std::vector<std::string>{"map", "info", town, "--json"}}) {
+    std::vector<std::string> argv{Bin("lockstep")};
+    argv.insert(argv.end(), args.begin(), args.end());
+    Process map(argv);
+    auto code = map.Wait(30s);
+    ASSERT_TRUE(code);
+    EXPECT_EQ(*code, 0) << map.Output();
+    EXPECT_EQ(map.Output().rfind("{\"name\":\"Town02\"", 0), 0u) << map.Output();
+  }
+}
+
 }  // namespace
 }  // namespace lockstep::testing

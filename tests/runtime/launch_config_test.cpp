@@ -3,6 +3,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cstdlib>
+
 namespace lockstep {
 namespace {
 
@@ -70,6 +72,15 @@ TEST(LaunchConfig, SyntaxErrorNamesTheLine) {
   const std::string e = ErrorOf("name: x\nworld: [1, 2\n");
   EXPECT_NE(e.find("test.yaml:"), std::string::npos) << e;
   EXPECT_NE(e.find("YAML syntax error"), std::string::npos) << e;
+}
+
+// Issue 7, part 4: default.yaml used to hard-code ../../build.
+TEST(LaunchConfig, TheBuildDirectoryComesFromTheEnvironmentNotTheConfig) {
+  setenv("LOCKSTEP_BUILD_DIR", "/somewhere/else", 1);
+  const LaunchConfig c = LoadLaunchConfig(std::string(LOCKSTEP_TEST_CONFIG_DIR) + "/default.yaml");
+  unsetenv("LOCKSTEP_BUILD_DIR");
+  EXPECT_EQ(c.map, "/somewhere/else/maps/generated/LockstepTown1.xodr");
+  EXPECT_EQ(BuildDir().empty(), false);
 }
 
 TEST(LaunchConfig, ShippedConfigsLoad) {

@@ -76,9 +76,14 @@ Process::Process(std::vector<std::string> argv, const std::map<std::string, std:
 }
 
 Process::~Process() {
+  // SIGTERM first: a service that stops destroys its participants, and one killed with
+  // SIGKILL leaves its shared-memory segments in /dev/shm.
   if (Running()) {
-    kill(pid_, SIGKILL);
-    Wait(std::chrono::seconds(5));
+    kill(pid_, SIGTERM);
+    if (!Wait(std::chrono::seconds(3))) {
+      kill(pid_, SIGKILL);
+      Wait(std::chrono::seconds(5));
+    }
   }
 }
 

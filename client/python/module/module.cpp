@@ -158,8 +158,8 @@ py::array View(const SensorSample& s, py::dtype dtype, std::vector<py::ssize_t> 
   return a;
 }
 
-const char* ImageEncodingName(msg::ImageEncoding e) {
-  switch (e) {
+const char* ImageEncodingName(uint32_t e) {
+  switch (static_cast<msg::ImageEncoding>(e)) {
     case msg::ImageEncoding::IMAGE_BGRA8: return "bgra8";
     case msg::ImageEncoding::IMAGE_DEPTH_F32: return "depth_f32";
     case msg::ImageEncoding::IMAGE_DEPTH_CARLA_BGRA8: return "depth_carla_bgra8";
@@ -167,6 +167,11 @@ const char* ImageEncodingName(msg::ImageEncoding e) {
     case msg::ImageEncoding::IMAGE_INSTANCE_BGRA8: return "instance_bgra8";
     case msg::ImageEncoding::IMAGE_NORMALS_BGRA8: return "normals_bgra8";
     case msg::ImageEncoding::IMAGE_GRAY8: return "gray8";
+    case msg::ImageEncoding::IMAGE_FLOW_F32X2: return "flow_f32x2";
+    case msg::ImageEncoding::IMAGE_DVS_EVENTS: return "dvs_events";
+    case msg::ImageEncoding::IMAGE_DEPTH_PERSPECTIVE_F32: return "depth_perspective_f32";
+    case msg::ImageEncoding::IMAGE_DISPARITY_F32: return "disparity_f32";
+    case msg::ImageEncoding::IMAGE_SEGMENTATION_BGRA8: return "segmentation_bgra8";
   }
   return "?";
 }
@@ -176,10 +181,28 @@ py::array SampleArray(const SensorSample& s) {
     const auto& im = s.As<msg::Image>();
     const auto h = static_cast<py::ssize_t>(im.height()), w = static_cast<py::ssize_t>(im.width());
     const auto step = static_cast<py::ssize_t>(im.step());
-    if (im.encoding() == msg::ImageEncoding::IMAGE_DEPTH_F32) {
+    using E = msg::ImageEncoding;
+    const auto enc = static_cast<E>(im.encoding());
+    if (enc == E::IMAGE_DEPTH_F32 || enc == E::IMAGE_DEPTH_PERSPECTIVE_F32 || enc == E::IMAGE_DISPARITY_F32) {
       return View(s, py::dtype::of<float>(), {h, w}, {step, 4}, im.data().data());
     }
-    if (im.encoding() == msg::ImageEncoding::IMAGE_GRAY8) {
+    if (enc == E::IMAGE_FLOW_F32X2) {
+      return View(s, py::dtype::of<float>(), {h, w, 2}, {step, 8, 4}, im.data().data());
+    }
+    if (enc == E::IMAGE_DVS_EVENTS) {
+      // CARLA's DVSEvent fields: x, y (uint16), t (int64 ns), pol (bool); 16 bytes each.
+      py::list names, formats, offsets;
+      for (const char* f : {"x", "y", "pol", "t"}) names.append(f);
+      for (const char* f : {"<u2", "<u2", "?", "<i8"}) formats.append(f);
+      for (int o : {0, 2, 4, 8}) offsets.append(o);
+      py::dict spec;
+      spec["names"] = names;
+      spec["formats"] = formats;
+      spec["offsets"] = offsets;
+      spec["itemsize"] = 16;
+      return View(s, py::dtype::from_args(spec), {w}, {16}, im.data().data());
+    }
+    if (enc == E::IMAGE_GRAY8) {
       return View(s, py::dtype::of<uint8_t>(), {h, w}, {step, 1}, im.data().data());
     }
     return View(s, py::dtype::of<uint8_t>(), {h, w, 4}, {step, 4, 1}, im.data().data());

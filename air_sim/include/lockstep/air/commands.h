@@ -30,16 +30,16 @@ enum class VelocityFrame {
 namespace cmd {
 struct Arm {};
 struct Disarm {};  // motors stop at once, also in flight
-struct Takeoff {
-  double height = 0;          // m above the current position; 0 = params.takeoff_height (2 m)
-  double timeout = 20;        // s
+struct Takeoff {               // AirSim: rejected while moving faster than 0.05 m/s; climbs at
+  double height = 0;          // takeoff_speed (0.5 m/s) to height m above the current position;
+  double timeout = 20;        // 0 = params.takeoff_height (2 m). timeout in s
 };
-struct Land {
-  double timeout = 60;        // s; completes once LANDED for 0.1 s, then motors idle (0)
+struct Land {                 // descends at landing_speed (0.2 m/s); completes once LANDED with a
+  double timeout = 60;        // vertical speed <= 0.05 m/s for 0.22 s, then motors idle (0)
 };
 struct Hover {};              // hold the current position and heading; completes at once
-struct GoHome {               // to above the spawn point, at max(current z, spawn z + takeoff_height)
-  double velocity = 5;        // m/s
+struct GoHome {               // AirSim: to the spawn point itself, at 0.5 m/s
+  double velocity = 0.5;      // m/s (Lockstep option; AirSim has no velocity argument)
   double timeout = kForever;  // s
 };
 struct MoveToPosition {
@@ -49,7 +49,7 @@ struct MoveToPosition {
   Drivetrain drivetrain = Drivetrain::kMaxDegreeOfFreedom;
   YawMode yaw_mode{};
   double lookahead = -1;         // m, max lead of the reference over the drone; -1 = auto
-  double adaptive_lookahead = 1; // s, lookahead >= adaptive_lookahead * speed; 0 = off
+  double adaptive_lookahead = 1; // 1, adds adaptive_lookahead x cross-track error to it; 0 = off
 };
 struct MoveOnPath {
   std::vector<Vec3> path{};      // m, world ENU waypoints (the current position is prepended)
@@ -58,7 +58,15 @@ struct MoveOnPath {
   Drivetrain drivetrain = Drivetrain::kMaxDegreeOfFreedom;
   YawMode yaw_mode{};
   double lookahead = -1;         // m; -1 = auto
-  double adaptive_lookahead = 1; // s
+  double adaptive_lookahead = 1; // 1
+};
+struct MoveToZ {                 // AirSim moveToZ: to altitude z above the current x, y
+  double z = 0;                  // m, world ENU
+  double velocity = 5;           // m/s
+  double timeout = kForever;     // s
+  YawMode yaw_mode{};
+  double lookahead = -1;         // m; -1 = auto
+  double adaptive_lookahead = 1; // 1
 };
 // Lockstep extension: follow a moving target given by its position at the start of this tick
 // and its velocity (feed-forward); the target is extrapolated at every physics sub-step.
@@ -103,6 +111,12 @@ struct MoveByRollPitchYawrateThrottle {
   double throttle = 0;           // 1
   double duration = 1;           // s
 };
+struct MoveByRollPitchYawrateZ {
+  double roll = 0, pitch = 0;    // rad
+  double yaw_rate = 0;           // rad/s about world up
+  double z = 0;                  // m, world ENU altitude
+  double duration = 1;           // s
+};
 struct MoveByAngleRatesThrottle {
   Vec3 rates = Vec3::Zero();     // rad/s, body FLU (roll, pitch, yaw rates)
   double throttle = 0;           // 1
@@ -120,8 +134,8 @@ struct MoveByMotorPwms {
 struct RotateToYaw {
   double yaw = 0;                // rad, ENU heading
   double timeout = kForever;     // s
-  double margin = 0.0872664626;  // rad (5 deg): completes when |error| < margin
-};
+  double margin = 0.0872664626;  // rad (5 deg): completes when |error| <= margin and the yaw
+};                               // rate is at most 0.01 rad/s (AirSim)
 struct RotateByYawRate {
   double yaw_rate = 0;           // rad/s, CCW positive
   double duration = 1;           // s
@@ -132,6 +146,11 @@ struct SetGains {
 struct SetPose {                 // teleport (simSetVehiclePose): zero velocity, motors kept
   Pose pose{};                   // world ENU
 };
+struct SetKinematics {           // simSetKinematics: pose and velocities at once
+  Pose pose{};                   // world ENU
+  Vec3 velocity = Vec3::Zero();          // m/s, world ENU
+  Vec3 angular_velocity = Vec3::Zero();  // rad/s, body FLU
+};
 }  // namespace cmd
 
 using CommandBody =
@@ -140,7 +159,8 @@ using CommandBody =
                  cmd::MoveByVelocityZ, cmd::MoveByRollPitchYawThrottle, cmd::MoveByRollPitchYawZ,
                  cmd::MoveByRollPitchYawrateThrottle, cmd::MoveByAngleRatesThrottle,
                  cmd::MoveByAngleRatesZ, cmd::MoveByMotorPwms, cmd::RotateToYaw,
-                 cmd::RotateByYawRate, cmd::SetGains, cmd::SetPose>;
+                 cmd::RotateByYawRate, cmd::SetGains, cmd::SetPose, cmd::MoveToZ,
+                 cmd::MoveByRollPitchYawrateZ, cmd::SetKinematics>;
 
 struct Command {
   CommandId id = 0;   // chosen by the caller (the coordinator); echoed in reports

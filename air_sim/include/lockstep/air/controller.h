@@ -55,6 +55,7 @@ struct KinematicsView {
   Quat orientation;       // FLU -> ENU
   Vec3 velocity;          // m/s, world ENU
   Vec3 angular_velocity;  // rad/s, body FLU
+  bool grounded = false;  // ground-locked: tilt goals are held level until lift-off
 };
 
 // One controller update: goal + measured kinematics -> rotor control signals in [0, 1].
@@ -64,9 +65,15 @@ void ControllerUpdate(const MultirotorParams& params, const DerivedParams& deriv
                       double density_ratio, double h, ControllerState* state,
                       std::array<double, kMaxRotors>* motors);
 
-// Mixer alone: throttle + normalised torques -> motor signals with yaw authority limited so
-// thrust and roll/pitch are kept (exposed for tests).
+// Mixer alone (gain_model physical): throttle + normalised torques -> motor signals with yaw
+// authority limited so thrust and roll/pitch are kept (exposed for tests).
 void Mix(const DerivedParams& derived, double throttle, const Vec3& torque,
          std::array<double, kMaxRotors>* motors);
+// simple_flight's mixer (gain_model airsim): below min_angling_throttle (0.05) every motor gets
+// the throttle; else throttle + torques, shifted up when a motor is below 0, scaled down when
+// one is above 1.
+inline constexpr double kMinAnglingThrottle = 0.05;
+void MixAirSim(const DerivedParams& derived, double throttle, const Vec3& torque,
+               std::array<double, kMaxRotors>* motors);
 
 }  // namespace lockstep::air

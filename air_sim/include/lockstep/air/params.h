@@ -5,6 +5,7 @@
 
 #include <map>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include "lockstep/air/types.h"
@@ -13,6 +14,29 @@ namespace lockstep::air {
 
 enum class FrameType { kQuadX, kQuadPlus, kHexaX };
 const char* ToString(FrameType f);
+
+// Model choices: AirSim's by default, Lockstep's earlier models as options (docs/air.md).
+enum class DragModel {
+  kAirSim,  // "airsim": six body faces with the rotors folded in (pi D^2 top/bottom, pi D h
+            // sides per rotor), faces at +-body_box, combined face velocity v + w x r, one
+            // coefficient (linear_drag_coefficient), no drag below 0.1 m/s face speed
+  kFaces    // "faces": bare body faces at +-body_box/2 plus rotor discs (pi D^2 / 4), linear
+            // and rotational parts squared separately with their own coefficients
+};
+enum class GainModel {
+  kAirSim,   // "airsim": simple_flight's PIDs: each output clipped to [-1, 1] and scaled by the
+             // child loop's limit; throttle (1 + u) / 2; no hover feed-forward
+  kPhysical  // "physical": the gains are physical (1/s, rad per m/s, throttle per m/s) with a
+             // hover-throttle feed-forward
+};
+enum class LandingModel {
+  kGroundLock,  // "ground_lock": AirSim: a level, descending touchdown locks to the ground
+                // (no bounce, levelled, zero velocity) until thrust exceeds weight
+  kImpulse      // "impulse": contacts only (restitution above restitution_threshold)
+};
+const char* ToString(DragModel m);
+const char* ToString(GainModel m);
+const char* ToString(LandingModel m);
 
 // One propeller + motor (AirSim RotorParams).
 struct RotorParams {
@@ -57,18 +81,22 @@ struct MultirotorParams {
   double arm_length = 0.2275;             // m, centre to rotor hub
   double motor_mass = 0.055;              // kg per motor (point mass at the hub)
   Vec3 body_box{0.18, 0.11, 0.04};        // m, full extents of the central box (x, y, z FLU)
-  double rotor_z = 0.0;                   // m, hub height above the centre of mass (body z)
+  double rotor_z = -0.025;                // m, hub height above the centre of mass (body FLU z);
+                                          // AirSim generic quad: +2.5 cm in FRD = 2.5 cm below
   RotorParams rotor;
-  double linear_drag_coefficient = 1.3 / 4;   // 1, C_d of body faces and rotor discs
-  double angular_drag_coefficient = 1.3 / 4;  // 1, C_d for the face velocity due to rotation
+  DragModel drag_model = DragModel::kAirSim;
+  GainModel gain_model = GainModel::kAirSim;
+  LandingModel landing_model = LandingModel::kGroundLock;
+  double linear_drag_coefficient = 1.3 / 4;   // 1, C_d of the drag faces (AirSim: the only one)
+  double angular_drag_coefficient = 1.3 / 4;  // 1, drag_model faces only: C_d for w x r
   double restitution = 0.55;              // 1, contact restitution
   double friction = 0.5;                  // 1, Coulomb friction coefficient
   double contact_radius = 0.06;           // m, radius of the default contact spheres
   std::vector<ContactSphere> contact_spheres;  // empty = one at the centre and one per rotor hub
   ControllerGains gains;
   double takeoff_height = 2.0;            // m above the take-off point (AirSim: z = -2 NED)
-  double takeoff_speed = 1.0;             // m/s
-  double landing_speed = 0.5;             // m/s
+  double takeoff_speed = 0.5;             // m/s (AirSim takeoff: moveToPosition at 0.5 m/s)
+  double landing_speed = 0.2;             // m/s (AirSim landing_vel_)
   double path_accel = 2.0;                // m/s^2, accel/decel of move commands' reference
   double arrival_tolerance = 0.2;         // m, distance at which a move command completes
   double turbulence_scale = 1.0;          // 1, multiplies Environment::turbulence_sigma
@@ -110,7 +138,8 @@ DerivedParams DeriveParams(const MultirotorParams& p);
 double RestHeight(const DerivedParams& d);
 
 // Visitor over every field with its dotted key ("rotor.max_rpm", "gains.velocity_p_xy").
-// Visitor callables: v(key, double&), v(key, Vec3&), v(key, FrameType&).
+// Visitor callables: v(key, double&), v(key, Vec3&), v(key, FrameType&), v(key, DragModel&),
+// v(key, GainModel&), v(key, LandingModel&).
 template <class V>
 void VisitParams(MultirotorParams& p, V&& v) {
   v("frame", p.frame);
@@ -119,6 +148,10 @@ void VisitParams(MultirotorParams& p, V&& v) {
   v("motor_mass", p.motor_mass);
   v("body_box", p.body_box);
   v("rotor_z", p.rotor_z);
+  // Model choices: visited only by visitors that take them (older visitors skip them).
+  if constexpr (std::is_invocable_v<V, const char*, DragModel&>) v("drag_model", p.drag_model);
+  if constexpr (std::is_invocable_v<V, const char*, GainModel&>) v("gain_model", p.gain_model);
+  if constexpr (std::is_invocable_v<V, const char*, LandingModel&>) v("landing_model", p.landing_model);
   v("rotor.thrust_coefficient", p.rotor.thrust_coefficient);
   v("rotor.power_coefficient", p.rotor.power_coefficient);
   v("rotor.max_rpm", p.rotor.max_rpm);

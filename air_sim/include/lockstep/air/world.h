@@ -84,7 +84,7 @@ enum class CommandMode : std::uint8_t {
   kIdle,            // motors off (disarmed, just armed, or landed after Land)
   kHold,            // hold hold_position / yaw_ref
   kTakeoff, kLand, kPath, kTrack, kVelocity, kVelocityZ, kRpyThrottle, kRpyZ,
-  kRpyRateThrottle, kRatesThrottle, kRatesZ, kPwm, kRotateToYaw, kRotateByYawRate
+  kRpyRateThrottle, kRatesThrottle, kRatesZ, kPwm, kRotateToYaw, kRotateByYawRate, kRpyRateZ
 };
 
 struct ActiveCommand {
@@ -106,7 +106,7 @@ struct ActiveCommand {
   double adaptive_lookahead = 0; // s
   Vec3 velocity = Vec3::Zero();  // m/s world (velocity commands, converted at start)
   Vec3 target = Vec3::Zero();    // m world (track / hold)
-  double landed_since = -1;      // s, Land: time LANDED began
+  double landed_since = -1;      // s, Land / RotateToYaw: time the completion condition began
 };
 
 struct DroneState {
@@ -122,6 +122,8 @@ struct DroneState {
   double total_thrust = 0;               // N, sum over rotors
   bool armed = false;
   LandedState landed = LandedState::kLanded;
+  bool grounded = false;                 // AirSim ground lock: levelled, moving with the surface
+                                         // under it, until thrust exceeds weight
   double last_support_time = -1;         // s, last contact with a supporting surface
   Vec3 support_velocity = Vec3::Zero();  // m/s, velocity of that surface
   CollisionInfo collision;
@@ -226,7 +228,9 @@ struct AirSimCollisionInfo {     // AirSim's CollisionInfo fields
 };
 AirSimCollisionInfo ToAirSim(const DroneModel& model, const CollisionInfo& c);
 
-// Order-sensitive FNV-1a hash of every drone's pose, velocity and rotor signals (bitwise).
+// Order-sensitive FNV-1a hash (bitwise) of everything a later step depends on: frame and time;
+// per drone the rigid body, rotors, contact memory, controller memory and gains, the active
+// command and its reference, the gust and the random generator state.
 std::uint64_t StateHash(const WorldState& state);
 
 }  // namespace lockstep::air

@@ -11,7 +11,7 @@
 namespace lockstep::client {
 
 enum class SensorType {
-  kImage,         // lockstep/sensor/image (cameras)
+  kImage,         // lockstep/sensor/image/<sensor id> (cameras, one topic each)
   kPointCloud,    // lockstep/sensor/point_cloud (LiDAR, semantic LiDAR)
   kRadar,
   kImu,

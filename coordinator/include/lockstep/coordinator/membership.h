@@ -22,8 +22,11 @@ struct Member {
   std::string host;
   uint64_t announced_frame = 0;  // last_frame in its last announcement
   std::chrono::steady_clock::time_point last_heard;  // last announcement
-  uint64_t last_frame = 0;     // last frame acked in the current run
+  uint32_t run = 0;            // run of the values below
+  uint64_t last_frame = 0;     // last frame acked in `run`
   uint64_t last_hash = 0;      // state hash acked with last_frame
+  uint64_t replay_from = 0;    // Ack.replay_from: it needs no logged tick up to this frame
+  std::string divergence;      // Ack.divergence in `run`
   double last_step_us = 0;     // wall time of its last step
   std::string failure;         // why it is not alive, if it failed
   uint32_t blueprints = 0;     // how many it says it declared (ServiceAnnounce.blueprints)
@@ -42,6 +45,8 @@ class Membership {
   // Its BlueprintSet arrived with `count` declarations. A member that announced READY
   // is alive only once the set it announced is here (the library must hold its blueprints).
   bool OnBlueprints(const std::string& service, long count);
+  // A new run (reset, map load): per-run values start again.
+  void NewRun(uint32_t run);
   // Marks members silent for longer than the timeout as dead (crashed or stopped).
   bool CheckHeartbeats(Clock::time_point now);
   // A member that did not finish `frame` in time; it stays dead until it acks it.
@@ -49,6 +54,8 @@ class Membership {
 
   // The first required service that is not alive, and why; empty reason if all are.
   std::string FirstMissing(std::string* service) const;
+  // Every required service that is not alive, with why, in the order of the config.
+  std::vector<std::pair<std::string, std::string>> Missing() const;
   const Member* Find(const std::string& service) const;
   const std::map<std::string, Member>& members() const { return members_; }
 

@@ -2,6 +2,7 @@
 // The middleware boundary. Services talk through a Bus: DdsBus (Fast DDS, for real
 // processes) or InProcessBus (in memory, for tests with no network). Fast DDS headers
 // stay behind this interface.
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -18,7 +19,8 @@ enum class QosKind {
   kCommand,     // RELIABLE, KEEP_LAST 256, VOLATILE: commands and replies
   kState,       // RELIABLE, KEEP_LAST 4, TRANSIENT_LOCAL: ground / air state
   kEvent,       // RELIABLE, KEEP_LAST 64, VOLATILE
-  kSensor,      // RELIABLE, KEEP_LAST 2, VOLATILE: images, point clouds
+  kSensor,      // RELIABLE, KEEP_LAST 2, VOLATILE: point clouds, IMU, ...
+  kImage,       // RELIABLE, KEEP_LAST 2, TRANSIENT_LOCAL, preallocated, data-sharing: camera images
 };
 const char* QosFamilyName(QosKind kind);
 int QosHistoryDepth(QosKind kind);
@@ -40,6 +42,8 @@ struct TypeOps {
   void* (*new_sample)();
   void (*delete_sample)(void*);
   void (*copy)(void* dst, const void* src);
+  // The sample's instance key (16 bytes, as DDS computes it); false for a keyless type.
+  bool (*key)(const void* sample, std::array<uint8_t, 16>* out);
 };
 
 class RawWriter {

@@ -47,6 +47,9 @@ struct LaunchConfig {
   std::vector<std::string> RequiredServices() const;
 };
 
+// The build directory: $LOCKSTEP_BUILD_DIR, else the one the running program was built
+// into (build/bin/<program>). "${LOCKSTEP_BUILD_DIR}" in `map` and `output_dir` expands to it.
+std::string BuildDir();
 LaunchConfig LoadLaunchConfig(const std::string& file);
 LaunchConfig ParseLaunchConfig(const std::string& yaml_text, const std::string& source_name);
 // Checks ranges and cross-field rules; throws InputError naming the field.

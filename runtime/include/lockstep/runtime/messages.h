@@ -1,4 +1,5 @@
 #pragma once
+#include <string>
 // Every topic of the system: name, type and QoS family. docs/topics.md mirrors this list.
 #include "lockstep/msg/blueprint.h"
 #include "lockstep/msg/clock.h"
@@ -51,7 +52,6 @@ inline constexpr Topic<msg::AirState> kAirState{"lockstep/air_state", QosKind::k
 inline constexpr Topic<msg::SimEvent> kEvent{"lockstep/event", QosKind::kEvent};
 inline constexpr Topic<msg::PhysicsEvents> kPhysicsEvents{"lockstep/physics_events", QosKind::kState};
 // Sensors.
-inline constexpr Topic<msg::Image> kImage{"lockstep/sensor/image", QosKind::kSensor};
 inline constexpr Topic<msg::PointCloud> kPointCloud{"lockstep/sensor/point_cloud", QosKind::kSensor};
 inline constexpr Topic<msg::RadarScan> kRadar{"lockstep/sensor/radar", QosKind::kSensor};
 inline constexpr Topic<msg::Imu> kImu{"lockstep/sensor/imu", QosKind::kSensor};
@@ -62,6 +62,8 @@ inline constexpr Topic<msg::CollisionEvent> kCollision{"lockstep/sensor/collisio
 inline constexpr Topic<msg::LaneInvasionEvent> kLaneInvasion{"lockstep/sensor/lane_invasion", QosKind::kEvent};
 inline constexpr Topic<msg::ObstacleDetection> kObstacle{"lockstep/sensor/obstacle", QosKind::kSensor};
 inline constexpr Topic<msg::DistanceMeasurement> kDistance{"lockstep/sensor/distance", QosKind::kSensor};
+// Camera images: one topic per camera (msg::Image), QosKind::kImage.
+inline std::string ImageTopicName(uint32_t sensor) { return "lockstep/sensor/image/" + std::to_string(sensor); }
 }  // namespace topics
 
 }  // namespace lockstep

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cstdint>
 #include <memory>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,18 @@ namespace lockstep {
 
 // No world info from a coordinator within ServiceOptions::world_info_timeout_s.
 class JoinTimeout : public InputError {
+ public:
+  using InputError::InputError;
+};
+
+// A step threw (on whichever thread it ran): the service stops, announcing the reason,
+// and Run throws this. A core whose input for a frame is missing throws MissingInput: the
+// run then faults with the reason instead of the state changing without it.
+class ServiceFailed : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+class MissingInput : public InputError {
  public:
   using InputError::InputError;
 };
@@ -74,7 +87,8 @@ class ServiceRunner {
   ServiceRunner(const ServiceRunner&) = delete;
   ServiceRunner& operator=(const ServiceRunner&) = delete;
 
-  // Runs until `stop` becomes true. Throws InputError if the coordinator never shows up.
+  // Runs until `stop` becomes true. Throws JoinTimeout if the coordinator never shows up,
+  // ServiceFailed if a step throws (the reason reaches the coordinator in the announcement).
   void Run(const std::atomic<bool>& stop);
   uint64_t last_frame() const;
 

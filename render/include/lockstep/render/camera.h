@@ -1,0 +1,65 @@
+#pragma once
+// Camera model as CARLA's: a pinhole from the horizontal field of view, principal point
+// at the image centre; the camera looks along its body +x with body +z up. Pixel (u, v)
+// covers [u, u+1) x [v, v+1), v grows downwards, row 0 is the top row.
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+
+#include "lockstep/render/types.h"
+
+namespace lockstep::render {
+
+inline constexpr double kFarPlane = 1000.0;  // m: CARLA's depth range; the sky is at this depth
+inline constexpr double kNearPlane = 0.1;    // m
+
+struct Camera {
+  int width = 800;
+  int height = 600;
+  double fov_deg = 90.0;           // horizontal
+  Pose pose;                       // world pose of the camera body
+  std::optional<Pose> previous_pose;  // pose of the previous rendered frame (optical flow)
+  std::uint32_t outputs = kOutColor;
+  // Exposure and lens (CARLA attributes of the same names).
+  double exposure_compensation = 0.0;  // EV: colour scaled by 2^ev
+  double gamma = 2.2;
+  double lens_circle_falloff = 5.0;
+  double lens_circle_multiplier = 0.0;  // 0: no vignetting (CARLA's default)
+  bool post_process = true;             // weather effects on the colour (rain streaks)
+  std::uint64_t noise_seed = 0;         // seeds rain streaks: run seed ^ sensor id
+
+  double Focal() const;  // px
+};
+
+// Pixel position (continuous) of a world point; nullopt behind the camera. depth: planar m.
+std::optional<Eigen::Vector2d> Project(const Camera& cam, const Vec3& world, double* depth = nullptr);
+// The 3x3 intrinsic matrix K as CARLA's examples build it.
+Eigen::Matrix3d Intrinsics(const Camera& cam);
+// World to camera view (OpenGL eye space: x right, y up, looking down -z).
+Eigen::Matrix4f ViewMatrix(const Pose& pose);
+// Projection to clip space with image rows top first (y flipped: row 0 = top).
+Eigen::Matrix4f ProjectionMatrix(const Camera& cam);
+
+// CARLA's depth encoding: normalized = (R + G*256 + B*65536) / (256^3 - 1), metres = 1000 * normalized.
+void EncodeCarlaDepth(float metres, std::uint8_t* bgra);
+double DecodeCarlaDepth(const std::uint8_t* bgra);
+
+// CARLA 0.9.14+ palette (29 classes, ids 0..28); unknown ids are black.
+std::array<std::uint8_t, 3> PaletteRgb(std::uint8_t tag);
+const char* ClassName(std::uint8_t tag);
+int ClassFromName(const std::string& name);  // -1 if unknown; case-insensitive
+// The 2017 CARLA paper's 12 classes (0 None, 1 Buildings, 2 Fences, 3 Other, 4 Pedestrians,
+// 5 Poles, 6 RoadLines, 7 Roads, 8 Sidewalks, 9 Vegetation, 10 Vehicles, 11 Walls, 12 TrafficSigns).
+std::uint8_t ToPaperClass(std::uint8_t tag);
+
+// CARLA semantic tags used by the renderer.
+namespace tag {
+inline constexpr std::uint8_t kUnlabeled = 0, kRoads = 1, kSideWalks = 2, kBuilding = 3, kWall = 4, kFence = 5,
+                              kPole = 6, kTrafficLight = 7, kTrafficSign = 8, kVegetation = 9, kTerrain = 10,
+                              kSky = 11, kPedestrian = 12, kRider = 13, kCar = 14, kTruck = 15, kBus = 16,
+                              kMotorcycle = 18, kBicycle = 19, kStatic = 20, kDynamic = 21, kOther = 22,
+                              kRoadLine = 24, kGround = 25;
+}
+
+}  // namespace lockstep::render

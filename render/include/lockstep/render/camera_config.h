@@ -1,0 +1,48 @@
+#pragma once
+// Camera blueprints (CARLA's ids and attributes, plus AirSim's image types) and the
+// parsing of a spawn's attributes into camera settings. The service turns the table into
+// blueprint declarations; parsing names the attribute that is wrong.
+#include <map>
+#include <string>
+#include <vector>
+
+#include "lockstep/render/camera.h"
+#include "lockstep/render/dvs.h"
+#include "lockstep/render/images.h"
+
+namespace lockstep::render {
+
+struct AttributeSpec {
+  std::string id;
+  char type = 'f';  // b(ool) i(nt) f(loat) s(tring)
+  std::string def;
+  double min = -1e300, max = 1e300;
+  std::vector<std::string> choices;  // restricted values for strings
+};
+
+struct CameraBlueprintSpec {
+  std::string id;  // e.g. "sensor.camera.rgb"
+  ImageKind kind;
+  std::vector<AttributeSpec> attributes;
+};
+
+const std::vector<CameraBlueprintSpec>& CameraBlueprints();
+bool IsCameraBlueprint(const std::string& id);
+
+struct CameraSettings {
+  std::string blueprint;
+  ImageKind kind = ImageKind::kRgb;
+  Camera camera;              // size, fov, exposure, lens; pose set per frame
+  double sensor_tick = 0;     // s between images; 0 = every frame
+  bool paper_classes = false; // semantic: the 2017 paper's 12 classes instead of CARLA's 29
+  DvsParams dvs;
+};
+
+// Largest image payload (bytes) a frame may carry: 1920 x 1080 x 4.
+inline constexpr std::size_t kMaxImageBytes = 8294400;
+
+// Attributes not given take their defaults; unknown ones are ignored (role_name, ...).
+// Throws std::invalid_argument naming the attribute and the value.
+CameraSettings ParseCamera(const std::string& blueprint, const std::map<std::string, std::string>& attributes);
+
+}  // namespace lockstep::render

@@ -1,0 +1,152 @@
+#include "lockstep/render/camera_config.h"
+
+#include <charconv>
+#include <cmath>
+#include <stdexcept>
+
+namespace lockstep::render {
+namespace {
+
+AttributeSpec F(const std::string& id, double def, double min, double max) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%g", def);
+  return AttributeSpec{id, 'f', buf, min, max, {}};
+}
+AttributeSpec I(const std::string& id, int def, double min, double max) { return AttributeSpec{id, 'i', std::to_string(def), min, max, {}}; }
+AttributeSpec B(const std::string& id, bool def) { return AttributeSpec{id, 'b', def ? "true" : "false", 0, 1, {}}; }
+AttributeSpec S(const std::string& id, const std::string& def, std::vector<std::string> choices) {
+  return AttributeSpec{id, 's', def, 0, 0, std::move(choices)};
+}
+
+std::vector<AttributeSpec> Basic() {
+  return {S("role_name", "", {}), I("image_size_x", 800, 1, 3840), I("image_size_y", 600, 1, 2160), F("fov", 90, 1, 170),
+          F("sensor_tick", 0, 0, 3600), F("lens_circle_falloff", 5, 0, 10), F("lens_circle_multiplier", 0, 0, 10)};
+}
+std::vector<AttributeSpec> Rgb() {
+  auto v = Basic();
+  v.push_back(F("gamma", 2.2, 0.5, 5));
+  v.push_back(S("exposure_mode", "manual", {"manual"}));
+  v.push_back(F("exposure_compensation", 0, -10, 10));
+  v.push_back(B("enable_postprocess_effects", true));
+  return v;
+}
+std::vector<AttributeSpec> With(std::vector<AttributeSpec> v, const std::vector<AttributeSpec>& more) {
+  v.insert(v.end(), more.begin(), more.end());
+  return v;
+}
+
+const AttributeSpec* Find(const CameraBlueprintSpec& bp, const std::string& id) {
+  for (const auto& a : bp.attributes) {
+    if (a.id == id) return &a;
+  }
+  return nullptr;
+}
+
+}  // namespace
+
+const std::vector<CameraBlueprintSpec>& CameraBlueprints() {
+  static const std::vector<CameraBlueprintSpec> list = {
+      {"sensor.camera.rgb", ImageKind::kRgb, Rgb()},
+      {"sensor.camera.depth", ImageKind::kDepth, With(Basic(), {S("encoding", "carla", {"carla", "float"})})},
+      {"sensor.camera.semantic_segmentation", ImageKind::kSemantic, With(Basic(), {S("classes", "carla", {"carla", "paper"})})},
+      {"sensor.camera.instance_segmentation", ImageKind::kInstance, Basic()},
+      {"sensor.camera.normals", ImageKind::kNormals, Basic()},
+      {"sensor.camera.optical_flow", ImageKind::kFlow, Basic()},
+      {"sensor.camera.dvs", ImageKind::kDvs,
+       With(Rgb(), {F("positive_threshold", 0.3, 0.001, 10), F("negative_threshold", 0.3, 0.001, 10),
+                    F("sigma_positive_threshold", 0, 0, 10), F("sigma_negative_threshold", 0, 0, 10),
+                    I("refractory_period_ns", 0, 0, 1e12), B("use_log", true), F("log_eps", 0.001, 1e-9, 1)})},
+      {"sensor.camera.airsim", ImageKind::kAirSimScene,
+       With(Rgb(), {S("image_type", "Scene",
+                      {"Scene", "DepthPlanar", "DepthPerspective", "DepthVis", "DisparityNormalized", "Segmentation",
+                       "SurfaceNormals", "Infrared"})})},
+  };
+  return list;
+}
+
+bool IsCameraBlueprint(const std::string& id) {
+  for (const auto& b : CameraBlueprints()) {
+    if (b.id == id) return true;
+  }
+  return false;
+}
+
+CameraSettings ParseCamera(const std::string& blueprint, const std::map<std::string, std::string>& attrs) {
+  const CameraBlueprintSpec* bp = nullptr;
+  for (const auto& b : CameraBlueprints()) {
+    if (b.id == blueprint) bp = &b;
+  }
+  if (!bp) throw std::invalid_argument("'" + blueprint + "' is not a camera blueprint");
+  auto text = [&](const std::string& id) {
+    auto it = attrs.find(id);
+    if (it != attrs.end()) return it->second;
+    const AttributeSpec* a = Find(*bp, id);
+    return a ? a->def : std::string();
+  };
+  auto number = [&](const std::string& id) {
+    const AttributeSpec* a = Find(*bp, id);
+    const std::string s = text(id);
+    double v = 0;
+    auto [p, ec] = std::from_chars(s.data(), s.data() + s.size(), v);
+    if (ec != std::errc() || p != s.data() + s.size() || !std::isfinite(v)) {
+      throw std::invalid_argument(blueprint + ": attribute " + id + " = '" + s + "' is not a number");
+    }
+    if (a && a->type == 'i' && v != std::floor(v)) throw std::invalid_argument(blueprint + ": attribute " + id + " = '" + s + "' is not an integer");
+    if (a && (v < a->min || v > a->max)) {
+      throw std::invalid_argument(blueprint + ": attribute " + id + " = " + s + " is outside [" + std::to_string(a->min) + ", " +
+                                  std::to_string(a->max) + "]");
+    }
+    return v;
+  };
+  auto boolean = [&](const std::string& id) {
+    const std::string s = text(id);
+    if (s == "true" || s == "True" || s == "1") return true;
+    if (s == "false" || s == "False" || s == "0") return false;
+    throw std::invalid_argument(blueprint + ": attribute " + id + " = '" + s + "' is not true or false");
+  };
+  auto choice = [&](const std::string& id) {
+    const AttributeSpec* a = Find(*bp, id);
+    const std::string s = text(id);
+    bool ok = a->choices.empty();
+    for (const auto& c : a->choices) ok = ok || c == s;
+    if (!ok) throw std::invalid_argument(blueprint + ": attribute " + id + " = '" + s + "' is not one of the allowed values");
+    return s;
+  };
+  CameraSettings s;
+  s.blueprint = blueprint;
+  s.kind = bp->kind;
+  s.camera.width = static_cast<int>(number("image_size_x"));
+  s.camera.height = static_cast<int>(number("image_size_y"));
+  s.camera.fov_deg = number("fov");
+  s.sensor_tick = number("sensor_tick");
+  s.camera.lens_circle_falloff = number("lens_circle_falloff");
+  s.camera.lens_circle_multiplier = number("lens_circle_multiplier");
+  if (Find(*bp, "gamma")) {
+    s.camera.gamma = number("gamma");
+    choice("exposure_mode");
+    s.camera.exposure_compensation = number("exposure_compensation");
+    s.camera.post_process = boolean("enable_postprocess_effects");
+  }
+  if (blueprint == "sensor.camera.depth" && choice("encoding") == "float") s.kind = ImageKind::kDepthFloat;
+  if (blueprint == "sensor.camera.semantic_segmentation") s.paper_classes = choice("classes") == "paper";
+  if (blueprint == "sensor.camera.airsim") s.kind = AirSimImageKind(choice("image_type"));
+  if (s.kind == ImageKind::kDvs) {
+    s.dvs.positive_threshold = number("positive_threshold");
+    s.dvs.negative_threshold = number("negative_threshold");
+    s.dvs.sigma_positive_threshold = number("sigma_positive_threshold");
+    s.dvs.sigma_negative_threshold = number("sigma_negative_threshold");
+    s.dvs.refractory_period_ns = static_cast<std::int64_t>(number("refractory_period_ns"));
+    s.dvs.use_log = boolean("use_log");
+    s.dvs.log_eps = number("log_eps");
+  }
+  const int bpp = s.kind == ImageKind::kDvs ? 4 : BytesPerPixel(s.kind);
+  if (static_cast<std::size_t>(s.camera.width) * s.camera.height * bpp > kMaxImageBytes) {
+    throw std::invalid_argument(blueprint + ": image_size_x x image_size_y = " + std::to_string(s.camera.width) + "x" +
+                                std::to_string(s.camera.height) + " gives more than " + std::to_string(kMaxImageBytes) +
+                                " bytes per image (1920x1080 BGRA at most)");
+  }
+  s.camera.outputs = OutputsFor(s.kind);
+  return s;
+}
+
+}  // namespace lockstep::render

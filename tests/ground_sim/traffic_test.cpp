@@ -67,6 +67,7 @@ TEST(GroundTraffic, ARedLightStopsATrafficManagerCarAtTheLine) {
   EXPECT_EQ(v.traffic_light, light);
   EXPECT_GE(v.stop_line_distance, 0.0);  // front bumper before the line
   EXPECT_LT(v.stop_line_distance, 3.0);  // and close to it
+  EXPECT_EQ(v.infractions.red_lights, 0); // its front never crossed the line on red
   // Green: it drives through without a red-light infraction.
   ASSERT_EQ(w.SetTrafficLight(light, LightColor::kGreen, -1, -1, -1, false), "");
   const Vec3 stopped = v.pose.position;
@@ -144,12 +145,16 @@ TEST(GroundTraffic, WalkersWithAnAiControllerWalkTheSidewalks) {
     EXPECT_GT((v.pose.position - start[v.id]).head<2>().norm(), 5.0) << "walker " << v.id;
   }
   EXPECT_GT(on_sidewalk, samples * 9 / 10);
-  // go_to_location and stop.
+  // go_to_location reaches the location (then, as in CARLA, the walker walks on), and stop.
   const uint32_t c = rep.controllers.front(), walker = rep.walkers.front();
   const Vec3 goal = w.Walker(walker)->pose.position + Vec3(3, 0, 0);
   ASSERT_EQ(w.ControllerGoTo(c, goal), "");
-  for (int i = 0; i < 100; ++i) w.Step(kDt);
-  EXPECT_LT((w.Walker(walker)->pose.position - goal).head<2>().norm(), 1.5);
+  double closest = 1e9;
+  for (int i = 0; i < 100; ++i) {
+    w.Step(kDt);
+    closest = std::min(closest, (w.Walker(walker)->pose.position - goal).head<2>().norm());
+  }
+  EXPECT_LT(closest, 0.3);
   ASSERT_EQ(w.ControllerStop(c), "");
   w.Step(kDt);
   EXPECT_FALSE(w.Walker(walker)->ai_controlled);

@@ -51,6 +51,9 @@ struct TmState {
   double random_draw_timer = 0;
   uint64_t ignore_draw_key = 0;          // junction entry the ignore-lights draw was made for
   bool ignore_light = false;
+  bool ignore_sign = false;              // drawn with ignore_light, for a stop sign there
+  double sign_wait = 0;                  // s stopped at the stop sign ahead
+  uint64_t sign_done_key = 0;            // junction entry whose stop sign it has stopped at
   uint64_t entry_key = 0;                // junction entry ahead (lane key) last step
   double front_to_line = -1;             // m from the front bumper to its stop line last step
   Pose kin_target;                       // kinematic: pose at the end of this step
@@ -207,6 +210,7 @@ struct World::Impl {
   void TmVehicle(VehicleActor* v, double dt, std::map<int, std::vector<const VehicleActor*>>* junction_users,
                  const std::vector<Obstacle>& obstacles);
   void FillPath(VehicleActor* v);
+  bool ChangeLane(VehicleActor* v, bool left, const std::vector<Obstacle>* obstacles);
   void MoveKinematic(VehicleActor* v, double dt);
   void AnchorPath(VehicleActor* v);
   void Respawn(VehicleActor* v);

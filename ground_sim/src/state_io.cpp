@@ -12,7 +12,7 @@ namespace lockstep::ground {
 namespace {
 
 constexpr uint32_t kMagic = 0x47524E44;  // "GRND"
-constexpr uint32_t kVersion = 2;  // 2: every field written explicitly (no struct padding)
+constexpr uint32_t kVersion = 3;  // 2: every field written explicitly (no struct padding); 3: stop signs
 
 class Writer {
  public:
@@ -168,12 +168,13 @@ AckermannControl GetAckermann(Reader& r) {
 }
 
 void PutInfractions(Writer& w, const Infractions& f) {
-  for (int x : {f.red_lights, f.vehicle_collisions, f.walker_collisions, f.static_collisions, f.lane_invasions})
+  for (int x : {f.red_lights, f.vehicle_collisions, f.walker_collisions, f.static_collisions, f.lane_invasions, f.stop_signs})
     w.Pod<int32_t>(x);
 }
 Infractions GetInfractions(Reader& r) {
   Infractions f;
-  for (int* x : {&f.red_lights, &f.vehicle_collisions, &f.walker_collisions, &f.static_collisions, &f.lane_invasions})
+  for (int* x : {&f.red_lights, &f.vehicle_collisions, &f.walker_collisions, &f.static_collisions, &f.lane_invasions,
+                 &f.stop_signs})
     *x = r.Pod<int32_t>();
   return f;
 }
@@ -273,6 +274,7 @@ void PutTm(Writer& w, const TmState& s) {
   for (int x : s.route) w.Pod<int32_t>(x);
   w.Pod(s.rng.s), w.Pod(s.speed), w.Pod(s.blocked), w.Pod<int32_t>(s.committed_junction), w.Pod(s.waiting), w.Pod<int32_t>(s.lane_change);
   w.Pod(s.lane_change_cooldown), w.Pod(s.random_draw_timer), w.Pod(s.ignore_draw_key), w.Pod(s.ignore_light);
+  w.Pod(s.ignore_sign), w.Pod(s.sign_wait), w.Pod(s.sign_done_key);
   w.Pod(s.entry_key), w.Pod(s.front_to_line), w.P(s.kin_target), PutTmParams(w, s.params), w.Pod(s.target_speed);
   w.Pod(s.steer_angle), w.Pod<int32_t>(s.light), w.Pod(s.light_distance);
 }
@@ -285,6 +287,7 @@ void GetTm(Reader& r, const map::Map& m, TmState* s) {
   r.Get(&s->waiting);
   s->lane_change = r.Pod<int32_t>();
   r.Get(&s->lane_change_cooldown), r.Get(&s->random_draw_timer), r.Get(&s->ignore_draw_key), r.Get(&s->ignore_light);
+  r.Get(&s->ignore_sign), r.Get(&s->sign_wait), r.Get(&s->sign_done_key);
   r.Get(&s->entry_key), r.Get(&s->front_to_line);
   s->kin_target = r.P();
   GetTmParams(r, &s->params), r.Get(&s->target_speed), r.Get(&s->steer_angle);

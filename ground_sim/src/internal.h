@@ -174,6 +174,7 @@ struct World::Impl {
   std::vector<Collision> collisions;
   std::vector<LaneInvasion> invasions;
   std::map<std::pair<uint32_t, uint32_t>, Collision> pending_collisions;  // (actor, other) -> sum
+  std::set<std::pair<uint32_t, uint32_t>> last_contacts;  // (actor, other) in contact last step (saved)
   std::vector<ContactRecord> contact_buffer;
   std::vector<dJointFeedback> feedback;
   std::vector<std::pair<size_t, size_t>> feedback_owner;  // feedback index -> contact index

@@ -12,7 +12,7 @@ namespace lockstep::ground {
 namespace {
 
 constexpr uint32_t kMagic = 0x47524E44;  // "GRND"
-constexpr uint32_t kVersion = 3;  // 2: every field written explicitly (no struct padding); 3: stop signs
+constexpr uint32_t kVersion = 3;  // 2: every field written explicitly (no struct padding); 3: stop signs, contacts of the last step
 
 class Writer {
  public:
@@ -328,6 +328,8 @@ std::vector<uint8_t> World::Save() const {
     PutWaypoints(w, c.path);
     w.Pod(c.rng.s);
   }
+  w.Pod<uint32_t>(static_cast<uint32_t>(I.last_contacts.size()));
+  for (const auto& [a, b] : I.last_contacts) w.Pod(a), w.Pod(b);
   return std::move(w.out);
 }
 
@@ -400,6 +402,11 @@ std::unique_ptr<World> World::Restore(std::shared_ptr<const Town> town, const st
     c.path = GetWaypoints(r, m);
     r.Get(&c.rng.s);
     I.controllers.emplace(c.id, std::move(c));
+  }
+  const auto ncontacts = r.Pod<uint32_t>();
+  for (uint32_t k = 0; k < ncontacts; ++k) {
+    const auto a = r.Pod<uint32_t>();
+    I.last_contacts.emplace(a, r.Pod<uint32_t>());
   }
   if (r.at != bytes.size()) throw std::runtime_error("ground state: trailing bytes");
   return world;

@@ -3,7 +3,6 @@ started the way a user starts them: `lockstep python examples/<name>.py`."""
 import os
 import subprocess
 
-
 from conftest import BIN, SOURCE
 
 

@@ -25,7 +25,9 @@ enum : std::uint32_t {
   kFeatureVignette = 128,
   kFeatureNormals = 256,  // OUT_NORMALS: the normals output is computed
   kFeatureFlow = 512,     // OUT_FLOW: the optical flow output is computed
+  kFeatureGamma22 = 1024, // GAMMA_22: the default gamma 2.2 by a polynomial instead of pow
 };
+constexpr int kNoiseSize = 256;  // lattice of the shaders' value noise (clouds, puddles)
 constexpr int kSlots = 2;  // read-back double buffer: draw camera i+1 while camera i is copied out
 constexpr int kShadowSize = 1024;
 constexpr double kShadowExtent = 60;  // m, half width of the sun's shadow box around the first camera
@@ -124,6 +126,7 @@ struct Renderer::Impl {
   Pbo pbos[kSlots][kOutputs];
   GLsync fences[kSlots] = {};
   GLuint shadow_fbo = 0, shadow_tex = 0;
+  GLuint noise_tex = 0;
   // The static town's shadow map (RenderTuning::static_shadow_cache) and what it was drawn for.
   GLuint static_shadow_fbo = 0, static_shadow_tex = 0;
   struct {
@@ -148,6 +151,7 @@ struct Renderer::Impl {
     // Shadow map of the sun, and the static town's part of it.
     MakeShadowMap(&shadow_tex, &shadow_fbo);
     MakeShadowMap(&static_shadow_tex, &static_shadow_fbo);
+    MakeNoise();
     AddTrafficLightModel();
   }
 
@@ -169,6 +173,27 @@ struct Renderer::Impl {
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
   }
 
+  // Lattice values in [0, 1) from an integer hash of the lattice point (fixed, no seed).
+  void MakeNoise() {
+    std::vector<float> v(static_cast<std::size_t>(kNoiseSize) * kNoiseSize);
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      std::uint32_t x = static_cast<std::uint32_t>(i) * 0x9e3779b9u + 0x7f4a7c15u;
+      x ^= x >> 16;
+      x *= 0x7feb352du;
+      x ^= x >> 15;
+      x *= 0x846ca68bu;
+      x ^= x >> 16;
+      v[i] = static_cast<float>(x >> 8) / 16777216.0f;
+    }
+    glGenTextures(1, &noise_tex);
+    glBindTexture(GL_TEXTURE_2D, noise_tex);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_R32F, kNoiseSize, kNoiseSize, 0, GL_RED, GL_FLOAT, v.data());
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_REPEAT);
+  }
+
   ~Impl() {
     statics.Release();
     for (auto& [size, t] : targets) {
@@ -186,6 +211,7 @@ struct Renderer::Impl {
     }
     glDeleteFramebuffers(1, &shadow_fbo);
     glDeleteTextures(1, &shadow_tex);
+    glDeleteTextures(1, &noise_tex);
     glDeleteFramebuffers(1, &static_shadow_fbo);
     glDeleteTextures(1, &static_shadow_tex);
     glDeleteBuffers(1, &model_vbo);
@@ -205,7 +231,7 @@ struct Renderer::Impl {
         {kFeatureColor, "LOCKSTEP_COLOR"}, {kFeatureShadows, "FEATURE_SHADOWS"}, {kFeatureNight, "FEATURE_NIGHT"},
         {kFeatureWet, "FEATURE_WET"},      {kFeaturePuddles, "FEATURE_PUDDLES"}, {kFeatureRain, "FEATURE_RAIN"},
         {kFeatureClouds, "FEATURE_CLOUDS"}, {kFeatureVignette, "FEATURE_VIGNETTE"}, {kFeatureNormals, "OUT_NORMALS"},
-        {kFeatureFlow, "OUT_FLOW"}};
+        {kFeatureFlow, "OUT_FLOW"}, {kFeatureGamma22, "GAMMA_22"}};
     const std::string common = shaders::kCommon;
     std::string head = "#version 330 core\n";
     for (const auto& [bit, name] : defines) {
@@ -234,6 +260,7 @@ struct Renderer::Impl {
     if (l.rain > 0 && cam.post_process) m |= kFeatureRain;
     if (l.clouds > 0.02f) m |= kFeatureClouds;
     if (cam.lens_circle_multiplier > 0) m |= kFeatureVignette;
+    if (cam.gamma == 2.2 || cam.gamma <= 0.1) m |= kFeatureGamma22;  // SetLighting reads gamma <= 0.1 as 2.2
     return m;
   }
 
@@ -446,6 +473,10 @@ struct Renderer::Impl {
       scene.SetInt("u_shadow_map", 0);
       scene.Set("u_shadow_matrix", *shadow_vp);
     }
+    glActiveTexture(GL_TEXTURE1);
+    glBindTexture(GL_TEXTURE_2D, noise_tex);
+    glActiveTexture(GL_TEXTURE0);
+    scene.SetInt("u_noise", 1);
     SetNightLights(cam, world, l);
     scene.Set("u_model", Eigen::Matrix4f::Identity().eval());
     scene.Set("u_prev_model", Eigen::Matrix4f::Identity().eval());
@@ -462,6 +493,7 @@ struct Renderer::Impl {
     glDisable(GL_CULL_FACE);
     sky.Use();
     SetLighting(sky, l, cam);
+    sky.SetInt("u_noise", 1);
     Eigen::Matrix4f view_rot = view, prev_rot = ViewMatrix(prev_pose);
     view_rot.topRightCorner<3, 1>().setZero();
     prev_rot.topRightCorner<3, 1>().setZero();

@@ -9,13 +9,17 @@ function(lockstep_fastdds_idl target)
   set(gen_root ${CMAKE_CURRENT_BINARY_DIR}/gen_fastdds)
   set(out ${gen_root}/${G_OUTPUT_SUBDIR})
   file(MAKE_DIRECTORY ${out})
+  # A temporary folder of this build: fastddsgen's default (/tmp, fixed file names) is
+  # shared by every build on the machine, and parallel builds overwrite each other's files.
+  set(tmp ${CMAKE_CURRENT_BINARY_DIR}/fastddsgen_tmp)
+  file(MAKE_DIRECTORY ${tmp})
   set(srcs)
   foreach(idl ${G_FILES})
     get_filename_component(name ${idl} NAME_WE)
     set(generated ${out}/${name}.h ${out}/${name}.cxx ${out}/${name}PubSubTypes.h ${out}/${name}PubSubTypes.cxx)
     add_custom_command(
       OUTPUT ${generated}
-      COMMAND ${FASTDDSGEN} -replace -I ${G_INCLUDE_DIR} -d ${out} ${idl}
+      COMMAND ${FASTDDSGEN} -replace -t ${tmp} -I ${G_INCLUDE_DIR} -d ${out} ${idl}
       DEPENDS ${G_FILES}
       COMMENT "fastddsgen ${name}.idl"
       VERBATIM)

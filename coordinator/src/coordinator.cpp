@@ -31,6 +31,9 @@ using msg::RunState;
 
 // Services announce themselves every 100 ms; silence this long means failure.
 constexpr auto kHeartbeatTimeout = std::chrono::milliseconds(600);
+// A process on this host that still runs but was not heard (its heartbeat thread starved
+// on an overloaded machine) gets this long before it counts as hung.
+constexpr auto kStarvedTimeout = std::chrono::seconds(5);
 
 namespace {
 
@@ -94,7 +97,9 @@ msg::WeatherParameters DefaultWeather() {
 }  // namespace
 
 struct Coordinator::Impl {
-  Impl(Bus& b, LaunchConfig c) : bus(b), config(std::move(c)) {}
+  Impl(Bus& b, LaunchConfig c) : bus(b), config(std::move(c)) {
+    members.SetProcessProbe(ProbeLocalProcess, kStarvedTimeout);
+  }
 
   Bus& bus;
   LaunchConfig config;

@@ -1,6 +1,10 @@
 #include "lockstep/coordinator/membership.h"
 
+#include <unistd.h>
+
 #include <cstdio>
+#include <fstream>
+#include <sstream>
 
 #include "lockstep/runtime/log.h"
 
@@ -9,6 +13,32 @@ namespace lockstep {
 Membership::Membership(const std::vector<std::string>& required, Clock::duration heartbeat_timeout)
     : required_(required), heartbeat_timeout_(heartbeat_timeout) {
   for (const auto& name : required_) members_[name].required = true;
+}
+
+ProcessState ProbeLocalProcess(const std::string& host, int32_t pid) {
+  char name[256] = {};
+  if (pid <= 0 || gethostname(name, sizeof name - 1) != 0 || host != name) return ProcessState::kUnknown;
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string line;
+  if (!std::getline(stat, line)) return ProcessState::kGone;
+  // "pid (comm) S ...": the state follows the last ')' (comm may hold spaces and parens).
+  const auto close = line.rfind(')');
+  if (close == std::string::npos || close + 2 >= line.size()) return ProcessState::kUnknown;
+  switch (line[close + 2]) {
+    case 'T':
+    case 't':
+      return ProcessState::kStopped;
+    case 'Z':
+    case 'X':
+      return ProcessState::kGone;
+    default:
+      return ProcessState::kRunning;
+  }
+}
+
+void Membership::SetProcessProbe(ProcessProbe probe, Clock::duration starved_timeout) {
+  probe_ = std::move(probe);
+  starved_timeout_ = starved_timeout;
 }
 
 bool Membership::OnAnnounce(const msg::ServiceAnnounce& a, Clock::time_point now) {
@@ -113,12 +143,18 @@ bool Membership::CheckHeartbeats(Clock::time_point now) {
   bool changed = false;
   for (auto& [name, m] : members_) {
     if (!m.alive || now - m.last_heard <= heartbeat_timeout_) continue;
+    const ProcessState process = probe_ ? probe_(m.host, m.pid) : ProcessState::kUnknown;
+    if (process == ProcessState::kRunning && now - m.last_heard <= starved_timeout_) continue;
     m.alive = false;
     m.ready = false;
     m.ready_announced = false;
     m.failure = "sent no heartbeat for " +
                 std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(now - m.last_heard).count()) +
-                " ms (crashed, hung or stopped; pid " + std::to_string(m.pid) + ")";
+                " ms (" + (process == ProcessState::kGone      ? "its process is gone"
+                           : process == ProcessState::kStopped ? "its process is stopped"
+                           : process == ProcessState::kRunning ? "its process runs but is hung"
+                                                               : "crashed, hung or stopped") +
+                "; pid " + std::to_string(m.pid) + ")";
     spdlog::error("service '{}' {}", name, m.failure);
     changed = true;
   }

@@ -13,8 +13,6 @@ namespace {
 constexpr double kSpacing = 2.0;           // m between path points
 constexpr double kComfortDecel = 3.0;      // m/s^2 for planned stops
 constexpr double kYellowDecel = 4.0;       // m/s^2: stop on yellow if this suffices
-constexpr double kMaxAccel = 3.5;          // m/s^2, kinematic mode
-constexpr double kMaxDecel = 8.0;          // m/s^2, kinematic mode
 constexpr double kMaxLateralAccel = 4.0;   // m/s^2 in curves
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
@@ -122,8 +120,9 @@ void World::Impl::AnchorPath(VehicleActor* v) {
 void World::Impl::MoveKinematic(VehicleActor* v, double dt) {
   auto& tm_state = v->tm;
   const double target = tm_state.target_speed;
-  tm_state.speed = std::clamp(target, tm_state.speed - kMaxDecel * dt, tm_state.speed + kMaxAccel * dt);
-  tm_state.speed = std::max(0.0, tm_state.speed);
+  // CARLA's hybrid mode teleports the car by its target velocity x dt each step: no
+  // acceleration limit (MotionPlanStage); stops are in the target's braking profile.
+  tm_state.speed = std::max(0.0, target);
   const auto& path = tm_state.path;
   const Pose pose = BodyPose(v->body);
   Pose out = pose;
@@ -253,6 +252,7 @@ void World::Impl::TmVehicle(VehicleActor* v, double dt, std::map<int, std::vecto
   const double half_x = v->spec->half_extents.x(), half_y = v->spec->half_extents.y();
   s.light = -1;
   s.light_distance = -1;
+  double stop_distance = kInf;  // m the front bumper may still travel (stop line, leader)
   if (path.size() < 2) {
     s.target_speed = 0;
   } else {
@@ -265,7 +265,8 @@ void World::Impl::TmVehicle(VehicleActor* v, double dt, std::map<int, std::vecto
 
     double limit = Get(s.params.desired_speed, kInf);
     if (!std::isfinite(limit)) {
-      v->speed_limit = m.SpeedLimit(path[1]);
+      // CARLA: the limit of the last speed sign passed (sticky across roads).
+      if (const double sign = town->SignSpeedLimit(path[0]); std::isfinite(sign)) v->speed_limit = sign;
       limit = v->speed_limit * (1.0 - Get(s.params.percentage_speed_difference, tm.percentage_speed_difference) / 100.0);
     }
     double target = std::max(0.0, limit);
@@ -387,11 +388,13 @@ void World::Impl::TmVehicle(VehicleActor* v, double dt, std::map<int, std::vecto
         const double gap = along - half_x - (c * o.half_x + sn * o.half_y);
         const double lead_speed = std::max(0.0, o.velocity.head<2>().dot(dirs[i]));
         const double room = gap - min_gap - 0.5 * speed;
+        if (lead_speed < 0.5) stop_distance = std::min(stop_distance, gap - min_gap);
         target = std::min(target, room <= 0 ? 0.0 : std::sqrt(lead_speed * lead_speed + 2 * kComfortDecel * room));
         break;
       }
     }
     if (stop_at < kInf) target = std::min(target, stop_at <= 0.05 ? 0.0 : std::sqrt(2 * kComfortDecel * stop_at));
+    stop_distance = std::min(stop_distance, stop_at);
     s.target_speed = target;
   }
 
@@ -440,6 +443,15 @@ void World::Impl::TmVehicle(VehicleActor* v, double dt, std::map<int, std::vecto
     c.throttle = std::clamp(0.25 + 0.4 * err, 0.0, 1.0);
   } else if (err < -0.6) {
     c.brake = std::clamp(-0.25 * err, 0.0, 1.0);
+  }
+  // Feed-forward for a stop ahead: the deceleration that stops the car in the room left
+  // (full brake is about 1 g); the PI loop alone lags and creeps over stop lines.
+  if (stop_distance < kInf && speed > 0.05) {
+    const double need = speed * speed / (2 * std::max(0.05, stop_distance));
+    if (need > 1.0) {
+      c.throttle = 0;
+      c.brake = std::max(c.brake, std::clamp(need / 9.0, 0.0, 1.0));
+    }
   }
   v->control = c;
   v->use_ackermann = false;

@@ -392,7 +392,13 @@ void World::Impl::UpdateMeasurements(double dt) {
       const auto overlap = map::ComputeFootprintOverlap(m, fp, yaw, 4);
       v.opposite_lane = overlap.opposite_lane;
       v.sidewalk = overlap.sidewalk;
-      v.speed_limit = m.SpeedLimitAt(p.position);
+      // The last speed sign passed on the lane it drives (CARLA's sticky vehicle limit).
+      if (auto wp = m.NearestWaypoint(p.position); wp) {
+        if (std::abs(Wrap(wp->transform.yaw - yaw)) > M_PI / 2) {
+          if (auto other = m.LeftLane(*wp); other && std::abs(Wrap(other->transform.yaw - yaw)) < M_PI / 2) wp = other;
+        }
+        if (const double sign = town->SignSpeedLimit(*wp); std::isfinite(sign)) v.speed_limit = sign;
+      }
     }
     v.footprint = fp;
     v.has_footprint = true;

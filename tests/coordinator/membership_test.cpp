@@ -1,6 +1,9 @@
 #include "lockstep/coordinator/membership.h"
 
 #include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 namespace lockstep {
 namespace {
@@ -53,6 +56,56 @@ TEST(Membership, SilenceLongerThanTheTimeoutIsAFailure) {
   // A replacement joins.
   EXPECT_TRUE(m.OnAnnounce(Announce("air", msg::ServiceState::SERVICE_READY, 20), t0 + 2s));
   EXPECT_EQ(m.FirstMissing(&who), "");
+}
+
+// On a loaded machine a live service's heartbeat thread can starve: a process the OS
+// shows running gets the longer lease; a stopped or vanished one fails at the timeout.
+TEST(Membership, ARunningProcessGetsTheStarvedLeaseAStoppedOrGoneOneDoesNot) {
+  for (const auto state : {ProcessState::kRunning, ProcessState::kStopped, ProcessState::kGone, ProcessState::kUnknown}) {
+    Membership m({"air"}, 600ms);
+    int32_t probed = 0;
+    m.SetProcessProbe(
+        [&](const std::string&, int32_t pid) {
+          probed = pid;
+          return state;
+        },
+        5s);
+    const auto t0 = Clock::now();
+    m.OnAnnounce(Announce("air", msg::ServiceState::SERVICE_READY, 10), t0);
+    const bool failed_early = m.CheckHeartbeats(t0 + 601ms);
+    EXPECT_EQ(probed, 10);
+    EXPECT_EQ(failed_early, state != ProcessState::kRunning) << static_cast<int>(state);
+    if (state == ProcessState::kRunning) {
+      EXPECT_FALSE(m.CheckHeartbeats(t0 + 5s)) << "exactly the starved lease is still alive";
+      EXPECT_TRUE(m.CheckHeartbeats(t0 + 5001ms));
+      std::string who;
+      EXPECT_NE(m.FirstMissing(&who).find("runs but is hung"), std::string::npos);
+    }
+  }
+}
+
+TEST(Membership, TheLocalProbeReadsProcStateAndIgnoresOtherHosts) {
+  char host[256] = {};
+  gethostname(host, sizeof host - 1);
+  EXPECT_EQ(ProbeLocalProcess(host, getpid()), ProcessState::kRunning);
+  EXPECT_EQ(ProbeLocalProcess("another-host-" + std::string(host), getpid()), ProcessState::kUnknown);
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    pause();
+    _exit(0);
+  }
+  kill(child, SIGSTOP);
+  int st = 0;
+  ASSERT_EQ(waitpid(child, &st, WUNTRACED), child);
+  EXPECT_EQ(ProbeLocalProcess(host, child), ProcessState::kStopped);
+  kill(child, SIGKILL);
+  // Unreaped, it is a zombie: gone.
+  siginfo_t info{};
+  ASSERT_EQ(waitid(P_PID, static_cast<id_t>(child), &info, WEXITED | WNOWAIT), 0);
+  EXPECT_EQ(ProbeLocalProcess(host, child), ProcessState::kGone);
+  waitpid(child, &st, 0);
+  EXPECT_EQ(ProbeLocalProcess(host, child), ProcessState::kGone);
 }
 
 TEST(Membership, AStalledServiceNeedsToFinishTheFrameNotJustHeartbeat) {

@@ -19,6 +19,7 @@
 #include <thread>
 
 #include "lockstep/runtime/bus.h"
+#include "process.h"
 
 namespace lockstep::runtime {
 namespace {
@@ -114,6 +115,7 @@ std::set<std::string> LockFiles() {
 // and removed once it was killed with SIGKILL.
 TEST(ShmSweepFastDds, RemovesTheSegmentOfAKilledParticipantAndKeepsALiveOnes) {
   if (!fs::exists("/dev/shm")) GTEST_SKIP() << "no /dev/shm";
+  const int domain = lockstep::testing::TestDomain();
   int ready[2];
   ASSERT_EQ(pipe(ready), 0);
   const auto before = LockFiles();
@@ -121,7 +123,7 @@ TEST(ShmSweepFastDds, RemovesTheSegmentOfAKilledParticipantAndKeepsALiveOnes) {
   ASSERT_GE(child, 0);
   if (child == 0) {
     close(ready[0]);
-    auto bus = CreateDdsBus({233, "", "lockstep.participant", "shm-sweep-victim"});
+    auto bus = CreateDdsBus({domain, "", "lockstep.participant", "shm-sweep-victim"});
     const char ok = 1;
     if (write(ready[1], &ok, 1) != 1) _exit(3);
     pause();

@@ -4,6 +4,7 @@
 // service, if any, is missing and why. No DDS inside; the clock is passed in.
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <map>
 #include <string>
 #include <vector>
@@ -34,10 +35,21 @@ struct Member {
   bool ready_announced = false;   // its last announcement said READY
 };
 
+// What the operating system says of a member's process, where it can tell.
+enum class ProcessState { kUnknown, kRunning, kStopped, kGone };
+// (host, pid) -> state; kUnknown for a process on another host.
+using ProcessProbe = std::function<ProcessState(const std::string& host, int32_t pid)>;
+// Reads /proc for a process on this host (by the host name services announce).
+ProcessState ProbeLocalProcess(const std::string& host, int32_t pid);
+
 class Membership {
  public:
   using Clock = std::chrono::steady_clock;
   Membership(const std::vector<std::string>& required, Clock::duration heartbeat_timeout);
+  // A member silent for the heartbeat timeout whose process the probe sees running (a
+  // machine so loaded that its heartbeat thread was not scheduled) fails only after
+  // `starved_timeout`; a stopped or vanished one, or one the probe cannot see, at once.
+  void SetProcessProbe(ProcessProbe probe, Clock::duration starved_timeout);
 
   // Each returns true when something a status report shows has changed.
   bool OnAnnounce(const msg::ServiceAnnounce& a, Clock::time_point now);
@@ -62,6 +74,8 @@ class Membership {
  private:
   std::vector<std::string> required_;
   Clock::duration heartbeat_timeout_;
+  ProcessProbe probe_;
+  Clock::duration starved_timeout_{};
   std::map<std::string, Member> members_;  // ordered by name
 };
 

@@ -34,6 +34,10 @@ class Town {
   int GroupCount() const { return group_count_; }
   // Index of the light governing the lane (road, section, lane) at its exit, or -1.
   int LightOfLane(int road, int section, int lane) const;
+  // Speed (m/s) of the last speed-limit sign on the waypoint's road behind it in its
+  // travel direction, NaN if none. Vehicles keep the last sign they passed (CARLA's
+  // speed-limit trigger boxes set the vehicle's limit; 30 km/h until the first).
+  double SignSpeedLimit(const map::Waypoint& wp) const;
   const std::vector<map::Transform>& SpawnPoints() const { return spawn_points_; }
   const std::vector<map::Transform>& WalkerSpawnPoints() const { return walker_spawn_points_; }
   uint64_t Hash() const { return hash_; }

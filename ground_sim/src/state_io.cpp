@@ -12,7 +12,7 @@ namespace lockstep::ground {
 namespace {
 
 constexpr uint32_t kMagic = 0x47524E44;  // "GRND"
-constexpr uint32_t kVersion = 2;  // 2: every field written explicitly (no struct padding)
+constexpr uint32_t kVersion = 3;  // 2: every field written explicitly (no struct padding); 3: stop signs, contacts of the last step
 
 class Writer {
  public:
@@ -168,12 +168,13 @@ AckermannControl GetAckermann(Reader& r) {
 }
 
 void PutInfractions(Writer& w, const Infractions& f) {
-  for (int x : {f.red_lights, f.vehicle_collisions, f.walker_collisions, f.static_collisions, f.lane_invasions})
+  for (int x : {f.red_lights, f.vehicle_collisions, f.walker_collisions, f.static_collisions, f.lane_invasions, f.stop_signs})
     w.Pod<int32_t>(x);
 }
 Infractions GetInfractions(Reader& r) {
   Infractions f;
-  for (int* x : {&f.red_lights, &f.vehicle_collisions, &f.walker_collisions, &f.static_collisions, &f.lane_invasions})
+  for (int* x : {&f.red_lights, &f.vehicle_collisions, &f.walker_collisions, &f.static_collisions, &f.lane_invasions,
+                 &f.stop_signs})
     *x = r.Pod<int32_t>();
   return f;
 }
@@ -273,6 +274,7 @@ void PutTm(Writer& w, const TmState& s) {
   for (int x : s.route) w.Pod<int32_t>(x);
   w.Pod(s.rng.s), w.Pod(s.speed), w.Pod(s.blocked), w.Pod<int32_t>(s.committed_junction), w.Pod(s.waiting), w.Pod<int32_t>(s.lane_change);
   w.Pod(s.lane_change_cooldown), w.Pod(s.random_draw_timer), w.Pod(s.ignore_draw_key), w.Pod(s.ignore_light);
+  w.Pod(s.ignore_sign), w.Pod(s.sign_wait), w.Pod(s.sign_done_key);
   w.Pod(s.entry_key), w.Pod(s.front_to_line), w.P(s.kin_target), PutTmParams(w, s.params), w.Pod(s.target_speed);
   w.Pod(s.steer_angle), w.Pod<int32_t>(s.light), w.Pod(s.light_distance);
 }
@@ -285,6 +287,7 @@ void GetTm(Reader& r, const map::Map& m, TmState* s) {
   r.Get(&s->waiting);
   s->lane_change = r.Pod<int32_t>();
   r.Get(&s->lane_change_cooldown), r.Get(&s->random_draw_timer), r.Get(&s->ignore_draw_key), r.Get(&s->ignore_light);
+  r.Get(&s->ignore_sign), r.Get(&s->sign_wait), r.Get(&s->sign_done_key);
   r.Get(&s->entry_key), r.Get(&s->front_to_line);
   s->kin_target = r.P();
   GetTmParams(r, &s->params), r.Get(&s->target_speed), r.Get(&s->steer_angle);
@@ -325,6 +328,8 @@ std::vector<uint8_t> World::Save() const {
     PutWaypoints(w, c.path);
     w.Pod(c.rng.s);
   }
+  w.Pod<uint32_t>(static_cast<uint32_t>(I.last_contacts.size()));
+  for (const auto& [a, b] : I.last_contacts) w.Pod(a), w.Pod(b);
   return std::move(w.out);
 }
 
@@ -397,6 +402,11 @@ std::unique_ptr<World> World::Restore(std::shared_ptr<const Town> town, const st
     c.path = GetWaypoints(r, m);
     r.Get(&c.rng.s);
     I.controllers.emplace(c.id, std::move(c));
+  }
+  const auto ncontacts = r.Pod<uint32_t>();
+  for (uint32_t k = 0; k < ncontacts; ++k) {
+    const auto a = r.Pod<uint32_t>();
+    I.last_contacts.emplace(a, r.Pod<uint32_t>());
   }
   if (r.at != bytes.size()) throw std::runtime_error("ground state: trailing bytes");
   return world;

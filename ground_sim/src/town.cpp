@@ -27,6 +27,10 @@ Town::Town(map::Map map, std::vector<map::Mesh> meshes) : map_(std::move(map)), 
     for (const auto& wp : info.stop_waypoints) lane_light_.emplace(std::make_tuple(wp.road, wp.section, wp.lane), index);
     lights_.push_back(std::move(l));
   }
+  signs_ = map_.StopSigns();
+  for (size_t i = 0; i < signs_.size(); ++i) {
+    for (const auto& wp : signs_[i].stop_waypoints) lane_sign_.emplace(std::make_tuple(wp.road, wp.section, wp.lane), static_cast<int>(i));
+  }
   spawn_points_ = map_.SpawnPoints();
   walker_spawn_points_ = map_.PedestrianSpawnPoints();
   uint64_t h = 1469598103934665603ull;
@@ -81,6 +85,11 @@ double Town::SignSpeedLimit(const map::Waypoint& wp) const {
     if (o.name.rfind("Speed_", 0) == 0) consider(o.s, o.t, "", std::atof(o.name.c_str() + 6) / 3.6);
   }
   return best;
+}
+
+int Town::SignOfLane(int road, int section, int lane) const {
+  auto it = lane_sign_.find(std::make_tuple(road, section, lane));
+  return it == lane_sign_.end() ? -1 : it->second;
 }
 
 int Town::LightOfLane(int road, int section, int lane) const {

@@ -350,8 +350,13 @@ void World::Impl::Substep(double h, bool) {
 
 void World::Impl::FinishEvents() {
   collisions.clear();
+  std::set<std::pair<uint32_t, uint32_t>> touching;
   for (auto& [key, c] : pending_collisions) {
     collisions.push_back(c);
+    touching.insert(key);
+    // The event every step in contact (like CARLA's collision sensor); the infraction
+    // once per contact (not while the car keeps touching the same object).
+    if (last_contacts.count(key)) continue;
     if (auto* v = FindVehicle(c.actor)) {
       switch (c.other_kind) {
         case ObjectKind::kVehicle: ++v->infractions.vehicle_collisions; break;
@@ -361,6 +366,7 @@ void World::Impl::FinishEvents() {
     }
   }
   pending_collisions.clear();
+  last_contacts = std::move(touching);
 }
 
 // Speed limit, footprint measures and lane invasions after the step.

@@ -77,6 +77,96 @@ TEST(GroundTraffic, ARedLightStopsATrafficManagerCarAtTheLine) {
   EXPECT_EQ(v.infractions.red_lights, 0);
 }
 
+// A stop sign: a full stop before the line, then on through the junction; a car that
+// ignores signs (ignore_signs_percentage 100) does not stop and gets the infraction.
+TEST(GroundTraffic, AStopSignStopsATrafficManagerCarThenLetsItGo) {
+  auto town = testing::StopSignTown();
+  ASSERT_EQ(town->Signs().size(), 1u);
+  for (bool ignore : {false, true}) {
+    World w(town, 4);
+    const Vec3 half = FindVehicle("vehicle.audi.tt")->half_extents;
+    ASSERT_EQ(w.AddVehicle(5, "vehicle.audi.tt", {}, Pose::FromYaw(Vec3(40, -1.75, half.z() + 0.02), 0)), "");
+    ASSERT_EQ(w.SetAutopilot(5, true), "");
+    if (ignore) {
+      ASSERT_EQ(w.SetTrafficManager(TmParam::kIgnoreSignsPercentage, 5, 100), "");
+    }
+    double stopped_near_line = 0, min_speed_before_line = 1e9;
+    for (int i = 0; i < 500; ++i) {
+      w.Step(kDt);
+      const auto v = *w.Vehicle(5);
+      const double front = v.pose.position.x() + half.x();
+      const double speed = v.velocity.norm();
+      if (front < 100 && front > 90) {
+        min_speed_before_line = std::min(min_speed_before_line, speed);
+        if (speed < 0.05) stopped_near_line += kDt;
+      }
+      EXPECT_FALSE(!ignore && speed > 0.5 && front > 100 && stopped_near_line < 2.0) << "crossed the line without stopping";
+    }
+    const auto v = *w.Vehicle(5);
+    EXPECT_GT(v.pose.position.x(), 115.0) << "it went on through the junction (ignore " << ignore << ")";
+    if (ignore) {
+      EXPECT_GT(min_speed_before_line, 2.0);
+      EXPECT_EQ(v.infractions.stop_signs, 1);
+    } else {
+      EXPECT_GE(stopped_near_line, 2.0);
+      EXPECT_EQ(v.infractions.stop_signs, 0);
+    }
+  }
+}
+
+// A Traffic Manager car on lane -1 of the two-lane road, at x.
+void AddTmCar(World* w, uint32_t id, double x, double y = -1.75) {
+  const Vec3 half = FindVehicle("vehicle.audi.tt")->half_extents;
+  ASSERT_EQ(w->AddVehicle(id, "vehicle.audi.tt", {}, Pose::FromYaw(Vec3(x, y, half.z() + 0.02), 0)), "");
+  ASSERT_EQ(w->SetAutopilot(id, true), "");
+}
+
+// auto_lane_change (CARLA's default: on): a car behind a slow leader moves over and
+// passes it without touching it; with the parameter off it stays behind.
+TEST(GroundTraffic, AutoLaneChangePassesASlowLeaderOnlyWhenAllowed) {
+  for (bool allowed : {true, false}) {
+    World w(testing::TwoLaneTown(), 6);
+    AddTmCar(&w, 5, 0);
+    AddTmCar(&w, 6, 30);
+    ASSERT_EQ(w.SetTrafficManager(TmParam::kDesiredSpeed, 6, 3.0), "");
+    if (!allowed) {
+      ASSERT_EQ(w.SetTrafficManager(TmParam::kAutoLaneChange, 5, 0), "");
+    }
+    double min_y = 0;
+    for (int i = 0; i < 600; ++i) {
+      w.Step(kDt);
+      min_y = std::min(min_y, w.Vehicle(5)->pose.position.y());
+      for (const auto& c : w.Collisions()) ASSERT_NE(c.other_kind, ObjectKind::kVehicle) << "step " << i;
+    }
+    const double fast = w.Vehicle(5)->pose.position.x(), slow = w.Vehicle(6)->pose.position.x();
+    if (allowed) {
+      EXPECT_GT(fast, slow + 10.0);
+      EXPECT_LT(min_y, -4.5);  // it drove on lane -2
+    } else {
+      EXPECT_LT(fast, slow);
+      EXPECT_GT(min_y, -2.5);
+    }
+  }
+}
+
+// random_right_lanechange_percentage 100 moves the car right within a few seconds;
+// force_lane_change brings it back left; there is no same-direction lane left of -1.
+TEST(GroundTraffic, RandomAndForcedLaneChanges) {
+  World w(testing::TwoLaneTown(), 7);
+  AddTmCar(&w, 5, 0);
+  ASSERT_EQ(w.SetTrafficManager(TmParam::kRandomRightLaneChangePercentage, 5, 100), "");
+  for (int i = 0; i < 100; ++i) w.Step(kDt);
+  EXPECT_NEAR(w.Vehicle(5)->pose.position.y(), -5.25, 0.5);
+  ASSERT_EQ(w.SetTrafficManager(TmParam::kRandomRightLaneChangePercentage, 5, 0), "");
+  ASSERT_EQ(w.ForceLaneChange(5, true), "");
+  for (int i = 0; i < 100; ++i) w.Step(kDt);
+  EXPECT_NEAR(w.Vehicle(5)->pose.position.y(), -1.75, 0.5);
+  EXPECT_NE(w.ForceLaneChange(5, true), "");
+  // Without the percentages it keeps its lane.
+  for (int i = 0; i < 200; ++i) w.Step(kDt);
+  EXPECT_NEAR(w.Vehicle(5)->pose.position.y(), -1.75, 0.5);
+}
+
 // A world with a hero on physics, hybrid mode for the rest, and walkers.
 std::unique_ptr<World> Populated(uint64_t seed) {
   auto w = std::make_unique<World>(testing::Town01(), seed);

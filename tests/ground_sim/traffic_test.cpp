@@ -291,3 +291,36 @@ TEST(GroundTraffic, Town01HundredVehiclesFiftyWalkersTenMinutes) {
 
 }  // namespace
 }  // namespace lockstep::ground
+
+namespace lockstep::ground {
+namespace {
+
+// The same town with every car on ODE physics (no hybrid mode), one simulated minute:
+// physics cars hold their lanes through the junction turns (no vehicle touches
+// another, none leaves the road into the town's statics) and stop for red lights.
+// bench/run ground runs this mode for longer.
+TEST(GroundTraffic, Town01HundredPhysicsCarsOneMinute) {
+  World w(testing::Town01(), 2017);
+  const auto rep = Populate(&w, 100, 50, 2017, 1000);
+  ASSERT_EQ(rep.vehicles.size(), 100u);
+  std::set<std::pair<uint32_t, uint32_t>> vehicle_pairs;
+  int static_hits = 0;
+  for (int i = 0; i < 1200; ++i) {
+    w.Step(kDt);
+    for (const auto& c : w.Collisions()) {
+      if (!w.IsVehicle(c.actor)) continue;
+      if (c.other_kind == ObjectKind::kVehicle) vehicle_pairs.insert({std::min(c.actor, c.other_actor), std::max(c.actor, c.other_actor)});
+      if (c.other_kind == ObjectKind::kStatic) ++static_hits;
+    }
+  }
+  int red = 0, kinematic = 0;
+  for (const auto& v : w.Vehicles()) red += v.infractions.red_lights, kinematic += v.kinematic;
+  EXPECT_EQ(kinematic, 0);
+  EXPECT_TRUE(vehicle_pairs.empty()) << vehicle_pairs.size() << " pairs, first " << vehicle_pairs.begin()->first << " and "
+                                     << vehicle_pairs.begin()->second;
+  EXPECT_EQ(static_hits, 0);
+  EXPECT_EQ(red, 0);
+}
+
+}  // namespace
+}  // namespace lockstep::ground

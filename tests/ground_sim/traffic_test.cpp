@@ -324,3 +324,48 @@ TEST(GroundTraffic, Town01HundredPhysicsCarsOneMinute) {
 
 }  // namespace
 }  // namespace lockstep::ground
+
+namespace lockstep::ground {
+namespace {
+
+// A walker of controller.ai.walker at a crosswalk (no lights): it waits at the kerb while
+// a car approaches, crosses once the car has passed, and nobody is hit.
+TEST(GroundTraffic, AWalkerCrossesAtTheCrosswalkAfterTheCarPasses) {
+  auto town = testing::CrosswalkTown();
+  ASSERT_EQ(town->Crosswalks().size(), 1u);
+  const auto& cw = town->Crosswalks()[0];
+  EXPECT_NEAR(cw.centre.x(), 100, 0.01);
+  World w(town, 3);
+  ASSERT_EQ(w.SetPedestriansCrossFactor(1.0), "");
+  EXPECT_NE(w.SetPedestriansCrossFactor(1.5), "");
+  const Vec3 half = FindVehicle("vehicle.audi.tt")->half_extents;
+  ASSERT_EQ(w.AddVehicle(5, "vehicle.audi.tt", {}, Pose::FromYaw(Vec3(0, -1.75, half.z() + 0.02), 0)), "");
+  ASSERT_EQ(w.SetAutopilot(5, true), "");
+  const Vec3 kerb = cw.ends[0].y() < 0 ? cw.ends[0] : cw.ends[1];  // the south kerb
+  ASSERT_LT(kerb.y(), -3.5);
+  EXPECT_NEAR((cw.ends[0] + cw.ends[1]).y(), 0.0, 1e-6);  // one on each side
+  ASSERT_EQ(w.AddWalker(9, "walker.pedestrian.0001", {}, Pose::FromYaw(kerb + Vec3(0, 0, 1.0), M_PI / 2)), "");
+  ASSERT_EQ(w.AddWalkerController(10, 9), "");
+  // Start walking when the car is at speed and about 20 m before the crosswalk.
+  int i = 0;
+  for (; i < 400 && w.Vehicle(5)->pose.position.x() < 78; ++i) w.Step(kDt);
+  ASSERT_GT(w.Vehicle(5)->velocity.norm(), 5.0);
+  ASSERT_EQ(w.ControllerStart(10), "");
+  bool on_road = false;
+  double car_x_when_on_road = 0;
+  for (; i < 1200; ++i) {
+    w.Step(kDt);
+    for (const auto& c : w.Collisions()) ASSERT_NE(c.other_kind, ObjectKind::kWalker) << "step " << i;
+    const double y = w.Walker(9)->pose.position.y();
+    if (!on_road && std::abs(y) < 3.5) {
+      on_road = true;
+      car_x_when_on_road = w.Vehicle(5)->pose.position.x();
+    }
+  }
+  ASSERT_TRUE(on_road) << "the walker never crossed";
+  EXPECT_GT(car_x_when_on_road - half.x(), 101.5) << "it stepped onto the road before the car had passed";
+  EXPECT_GT(w.Walker(9)->pose.position.y(), 3.0) << "it reached the other side";
+}
+
+}  // namespace
+}  // namespace lockstep::ground

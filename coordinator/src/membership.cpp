@@ -1,5 +1,6 @@
 #include "lockstep/coordinator/membership.h"
 
+#include <algorithm>
 #include <cstdio>
 
 #include "lockstep/runtime/log.h"
@@ -7,7 +8,10 @@
 namespace lockstep {
 
 Membership::Membership(const std::vector<std::string>& required, Clock::duration heartbeat_timeout)
-    : required_(required), heartbeat_timeout_(heartbeat_timeout) {
+    : Membership(required, HeartbeatTimeouts{heartbeat_timeout, heartbeat_timeout, heartbeat_timeout}, {}) {}
+
+Membership::Membership(const std::vector<std::string>& required, HeartbeatTimeouts timeouts, ProcessProbe probe)
+    : required_(required), timeouts_(timeouts), probe_(std::move(probe)) {
   for (const auto& name : required_) members_[name].required = true;
 }
 
@@ -21,7 +25,12 @@ bool Membership::OnAnnounce(const msg::ServiceAnnounce& a, Clock::time_point now
   m.host = a.host().to_string();
   m.announced_frame = a.last_frame();
   m.ready_announced = a.state() == msg::ServiceState::SERVICE_READY;
-  if (m.stalled_frame != 0 && m.pid != a.pid()) m.stalled_frame = 0;  // a replacement process
+  if (m.pid != 0 && m.pid != a.pid()) {
+    // A replacement process: the stall and the failure were its predecessor's. (Kept, the
+    // launcher would take the replacement, not yet ready, for hung and kill it too.)
+    m.stalled_frame = 0;
+    m.failure.clear();
+  }
   if (a.state() == msg::ServiceState::SERVICE_READY && m.stalled_frame != 0) {
     // Heartbeats alone do not clear a stall: the service must finish the frame.
   } else if (a.state() == msg::ServiceState::SERVICE_READY && m.blueprints != 0 &&
@@ -110,15 +119,32 @@ bool Membership::OnBlueprints(const std::string& service, long count) {
 }
 
 bool Membership::CheckHeartbeats(Clock::time_point now) {
+  // The caller runs at least every 100 ms: a longer gap is time it was not running.
+  constexpr auto kPeriod = std::chrono::milliseconds(100);
+  if (last_check_ && now - *last_check_ > 2 * kPeriod) {
+    const auto credit = now - *last_check_ - kPeriod;
+    for (auto& [name, m] : members_) m.last_heard = std::min(now, m.last_heard + credit);
+  }
+  last_check_ = now;
   bool changed = false;
+  auto ms = [](Clock::duration d) { return std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(d).count()); };
   for (auto& [name, m] : members_) {
-    if (!m.alive || now - m.last_heard <= heartbeat_timeout_) continue;
+    const auto silent = now - m.last_heard;
+    if (!m.alive || silent <= timeouts_.missed) continue;
+    const ProcessState process = probe_ && silent > timeouts_.missed ? probe_(m.host, m.pid) : ProcessState::kUnknown;
+    std::string why;
+    if (process == ProcessState::kGone) {
+      why = "process " + std::to_string(m.pid) + " is gone (crashed or killed; silent for " + ms(silent) + " ms)";
+    } else if (process == ProcessState::kRunning && silent > timeouts_.hang) {
+      why = "sent no heartbeat for " + ms(silent) + " ms while its process runs (hung or stopped; pid " + std::to_string(m.pid) + ")";
+    } else if (process == ProcessState::kUnknown && silent > timeouts_.silence) {
+      why = "sent no heartbeat for " + ms(silent) + " ms (crashed, hung or stopped; pid " + std::to_string(m.pid) + ")";
+    }
+    if (why.empty()) continue;
     m.alive = false;
     m.ready = false;
     m.ready_announced = false;
-    m.failure = "sent no heartbeat for " +
-                std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(now - m.last_heard).count()) +
-                " ms (crashed, hung or stopped; pid " + std::to_string(m.pid) + ")";
+    m.failure = why;
     spdlog::error("service '{}' {}", name, m.failure);
     changed = true;
   }

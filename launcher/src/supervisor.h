@@ -43,7 +43,8 @@ class Supervisor {
   };
   void Start(Child& c);
   void Drain(Child& c, bool all);
-  void StopAll();
+  void StopAll();                 // the coordinator, then the services
+  void Stop(bool coordinator);    // SIGTERM, then SIGKILL after 5 s
   void KillHung();
   std::vector<Child> children_;
   HangCheck hung_;

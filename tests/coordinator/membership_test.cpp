@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
+#include <optional>
+
 namespace lockstep {
 namespace {
 
@@ -53,6 +56,73 @@ TEST(Membership, SilenceLongerThanTheTimeoutIsAFailure) {
   // A replacement joins.
   EXPECT_TRUE(m.OnAnnounce(Announce("air", msg::ServiceState::SERVICE_READY, 20), t0 + 2s));
   EXPECT_EQ(m.FirstMissing(&who), "");
+}
+
+// Checks every 100 ms, as the coordinator's loop does, from `from` to `to`; returns the
+// first time a member was found dead (or nullopt).
+std::optional<Clock::duration> FirstDeath(Membership& m, Clock::time_point t0, Clock::duration from, Clock::duration to) {
+  for (auto t = from; t <= to; t += 100ms) {
+    if (m.CheckHeartbeats(t0 + t)) return t;
+  }
+  return std::nullopt;
+}
+
+TEST(Membership, AGoneProcessIsDeadAtOnceARunningOneOnlyAfterTheHangTimeout) {
+  std::map<int32_t, ProcessState> processes{{10, ProcessState::kGone}, {11, ProcessState::kRunning}};
+  HeartbeatTimeouts timeouts;
+  timeouts.silence = 600ms;
+  timeouts.hang = 3s;
+  timeouts.missed = 150ms;
+  Membership m({"a", "b", "c"}, timeouts, [&](const std::string& host, int32_t pid) {
+    return host == "here" && processes.count(pid) ? processes[pid] : ProcessState::kUnknown;
+  });
+  const auto t0 = Clock::now();
+  auto announce = [&](const std::string& name, int32_t pid, const std::string& host) {
+    auto a = Announce(name, msg::ServiceState::SERVICE_READY, pid);
+    a.host(host);
+    m.OnAnnounce(a, t0);
+  };
+  announce("a", 10, "here");
+  announce("b", 11, "here");
+  announce("c", 12, "there");
+  std::string who;
+  EXPECT_EQ(FirstDeath(m, t0, 0ms, 5s), std::optional<Clock::duration>(200ms)) << "killed: dead once a heartbeat is missed";
+  EXPECT_EQ(m.FirstMissing(&who), "process 10 is gone (crashed or killed; silent for 200 ms)");
+  EXPECT_EQ(FirstDeath(m, t0, 300ms, 5s), std::optional<Clock::duration>(700ms)) << "another host: heartbeats only";
+  EXPECT_NE(m.Find("c")->failure.find("sent no heartbeat for 700 ms (crashed, hung or stopped; pid 12)"), std::string::npos)
+      << m.Find("c")->failure;
+  EXPECT_EQ(FirstDeath(m, t0, 800ms, 5s), std::optional<Clock::duration>(3100ms)) << "running but silent: hung after 3 s";
+  EXPECT_NE(m.Find("b")->failure.find("sent no heartbeat for 3100 ms while its process runs (hung or stopped; pid 11)"),
+            std::string::npos)
+      << m.Find("b")->failure;
+}
+
+// `lockstep up` kills a member reported failed whose pid still runs: a replacement that
+// is still starting must not inherit its predecessor's failure.
+TEST(Membership, AReplacementProcessDoesNotInheritTheFailureOfTheOneItReplaces) {
+  Membership m({"air"}, 600ms);
+  const auto t0 = Clock::now();
+  m.OnAnnounce(Announce("air", msg::ServiceState::SERVICE_READY, 10), t0);
+  m.MarkStalled("air", 5);
+  EXPECT_EQ(m.Find("air")->failure, "timed out on frame 5");
+  m.OnAnnounce(Announce("air", msg::ServiceState::SERVICE_STARTING, 11), t0 + 1s);
+  EXPECT_FALSE(m.Find("air")->alive);
+  EXPECT_EQ(m.Find("air")->failure, "");
+  std::string who;
+  EXPECT_EQ(m.FirstMissing(&who), "has not announced ready");
+  m.OnAnnounce(Announce("air", msg::ServiceState::SERVICE_READY, 11), t0 + 1100ms);
+  EXPECT_EQ(m.FirstMissing(&who), "") << "no stall of its predecessor holds it back";
+}
+
+TEST(Membership, TimeTheCoordinatorItselfDidNotRunIsNotSilence) {
+  Membership m({"air"}, 600ms);
+  const auto t0 = Clock::now();
+  m.OnAnnounce(Announce("air", msg::ServiceState::SERVICE_READY, 10), t0);
+  EXPECT_FALSE(m.CheckHeartbeats(t0 + 100ms));
+  // The coordinator was stopped or starved for a second: the heartbeats of that second
+  // are still queued behind it, so 900 ms of it count as heard from.
+  EXPECT_FALSE(m.CheckHeartbeats(t0 + 1100ms));
+  EXPECT_EQ(FirstDeath(m, t0, 1200ms, 3s), std::optional<Clock::duration>(1600ms)) << "then 600 ms of real silence";
 }
 
 TEST(Membership, AStalledServiceNeedsToFinishTheFrameNotJustHeartbeat) {

@@ -9,6 +9,10 @@ function(lockstep_fastdds_idl target)
   set(gen_root ${CMAKE_CURRENT_BINARY_DIR}/gen_fastdds)
   set(out ${gen_root}/${G_OUTPUT_SUBDIR})
   file(MAKE_DIRECTORY ${out})
+  # A temporary folder of this build: fastddsgen's default (/tmp, fixed file names) is
+  # shared by every build on the machine, and parallel builds overwrite each other's files.
+  set(tmp ${CMAKE_CURRENT_BINARY_DIR}/fastddsgen_tmp)
+  file(MAKE_DIRECTORY ${tmp})
   set(srcs)
   foreach(idl ${G_FILES})
     get_filename_component(name ${idl} NAME_WE)

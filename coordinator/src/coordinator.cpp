@@ -1,7 +1,5 @@
 #include "lockstep/coordinator/coordinator.h"
 
-#include <unistd.h>
-
 #include <chrono>
 #include <condition_variable>
 #include <deque>
@@ -31,38 +29,13 @@ namespace lockstep {
 using Clock = std::chrono::steady_clock;
 using msg::RunState;
 
+// Services announce themselves every 100 ms; silence this long means failure.
+constexpr auto kHeartbeatTimeout = std::chrono::milliseconds(600);
+// A process on this host that still runs but was not heard (its heartbeat thread starved
+// on an overloaded machine) gets this long before it counts as hung.
+constexpr auto kStarvedTimeout = std::chrono::seconds(5);
+
 namespace {
-
-// Services announce themselves every 100 ms. A member on this host whose process is gone
-// is dead once it missed a heartbeat or so; one whose process runs is hung only after 3 s
-// of silence (a loaded machine delays threads for hundreds of ms, and a hung member gets
-// killed by the launcher); one on another host after 600 ms.
-HeartbeatTimeouts Timeouts() {
-  HeartbeatTimeouts t;
-  t.silence = std::chrono::milliseconds(600);
-  t.hang = std::chrono::seconds(3);
-  t.missed = std::chrono::milliseconds(150);
-  return t;
-}
-
-std::string HostName() {
-  char h[64] = {};
-  gethostname(h, sizeof h - 1);
-  return h;
-}
-
-// /proc/<pid>/stat of a process on this host: gone when absent or a zombie.
-ProcessState Probe(const std::string& host, int32_t pid) {
-  static const std::string self = HostName();
-  if (pid <= 0 || host != self) return ProcessState::kUnknown;
-  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
-  if (!stat) return ProcessState::kGone;
-  std::string line;
-  std::getline(stat, line);
-  const auto paren = line.rfind(')');  // the name may hold spaces and parentheses
-  if (paren == std::string::npos || paren + 2 >= line.size()) return ProcessState::kUnknown;
-  return line[paren + 2] == 'Z' || line[paren + 2] == 'X' ? ProcessState::kGone : ProcessState::kRunning;
-}
 
 
 std::string ReadFile(const std::string& path) {
@@ -124,7 +97,9 @@ msg::WeatherParameters DefaultWeather() {
 }  // namespace
 
 struct Coordinator::Impl {
-  Impl(Bus& b, LaunchConfig c) : bus(b), config(std::move(c)) {}
+  Impl(Bus& b, LaunchConfig c) : bus(b), config(std::move(c)) {
+    members.SetProcessProbe(ProbeLocalProcess, kStarvedTimeout);
+  }
 
   Bus& bus;
   LaunchConfig config;
@@ -134,7 +109,7 @@ struct Coordinator::Impl {
   mutable std::mutex mu;
   std::condition_variable cv;
   const std::vector<std::string> required_services = config.RequiredServices();
-  Membership members{required_services, Timeouts(), Probe};
+  Membership members{required_services, kHeartbeatTimeout};
   std::deque<msg::Command> inbox;
 
   // Run state, touched by the main loop only (under mu).

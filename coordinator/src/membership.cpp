@@ -1,18 +1,45 @@
 #include "lockstep/coordinator/membership.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cstdio>
+#include <fstream>
+#include <sstream>
 
 #include "lockstep/runtime/log.h"
 
 namespace lockstep {
 
 Membership::Membership(const std::vector<std::string>& required, Clock::duration heartbeat_timeout)
-    : Membership(required, HeartbeatTimeouts{heartbeat_timeout, heartbeat_timeout, heartbeat_timeout}, {}) {}
-
-Membership::Membership(const std::vector<std::string>& required, HeartbeatTimeouts timeouts, ProcessProbe probe)
-    : required_(required), timeouts_(timeouts), probe_(std::move(probe)) {
+    : required_(required), heartbeat_timeout_(heartbeat_timeout) {
   for (const auto& name : required_) members_[name].required = true;
+}
+
+ProcessState ProbeLocalProcess(const std::string& host, int32_t pid) {
+  char name[256] = {};
+  if (pid <= 0 || gethostname(name, sizeof name - 1) != 0 || host != name) return ProcessState::kUnknown;
+  std::ifstream stat("/proc/" + std::to_string(pid) + "/stat");
+  std::string line;
+  if (!std::getline(stat, line)) return ProcessState::kGone;
+  // "pid (comm) S ...": the state follows the last ')' (comm may hold spaces and parens).
+  const auto close = line.rfind(')');
+  if (close == std::string::npos || close + 2 >= line.size()) return ProcessState::kUnknown;
+  switch (line[close + 2]) {
+    case 'T':
+    case 't':
+      return ProcessState::kStopped;
+    case 'Z':
+    case 'X':
+      return ProcessState::kGone;
+    default:
+      return ProcessState::kRunning;
+  }
+}
+
+void Membership::SetProcessProbe(ProcessProbe probe, Clock::duration starved_timeout) {
+  probe_ = std::move(probe);
+  starved_timeout_ = starved_timeout;
 }
 
 bool Membership::OnAnnounce(const msg::ServiceAnnounce& a, Clock::time_point now) {
@@ -119,32 +146,33 @@ bool Membership::OnBlueprints(const std::string& service, long count) {
 }
 
 bool Membership::CheckHeartbeats(Clock::time_point now) {
-  // The caller runs at least every 100 ms: a longer gap is time it was not running.
+  // The caller runs at least every 100 ms: a longer gap is time it did not run itself
+  // (starved or stopped), and the announcements of that time are still queued behind it.
   constexpr auto kPeriod = std::chrono::milliseconds(100);
   if (last_check_ && now - *last_check_ > 2 * kPeriod) {
     const auto credit = now - *last_check_ - kPeriod;
     for (auto& [name, m] : members_) m.last_heard = std::min(now, m.last_heard + credit);
   }
   last_check_ = now;
+  // A member that missed a heartbeat or so is probed: a process known gone fails at once
+  // (a kill -9 is noticed in about 0.2 s), others at their timeout.
+  const auto missed = std::min<Clock::duration>(heartbeat_timeout_, std::chrono::milliseconds(150));
   bool changed = false;
-  auto ms = [](Clock::duration d) { return std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(d).count()); };
   for (auto& [name, m] : members_) {
-    const auto silent = now - m.last_heard;
-    if (!m.alive || silent <= timeouts_.missed) continue;
-    const ProcessState process = probe_ && silent > timeouts_.missed ? probe_(m.host, m.pid) : ProcessState::kUnknown;
-    std::string why;
-    if (process == ProcessState::kGone) {
-      why = "process " + std::to_string(m.pid) + " is gone (crashed or killed; silent for " + ms(silent) + " ms)";
-    } else if (process == ProcessState::kRunning && silent > timeouts_.hang) {
-      why = "sent no heartbeat for " + ms(silent) + " ms while its process runs (hung or stopped; pid " + std::to_string(m.pid) + ")";
-    } else if (process == ProcessState::kUnknown && silent > timeouts_.silence) {
-      why = "sent no heartbeat for " + ms(silent) + " ms (crashed, hung or stopped; pid " + std::to_string(m.pid) + ")";
-    }
-    if (why.empty()) continue;
+    if (!m.alive || now - m.last_heard <= missed) continue;
+    const ProcessState process = probe_ ? probe_(m.host, m.pid) : ProcessState::kUnknown;
+    if (process != ProcessState::kGone && now - m.last_heard <= heartbeat_timeout_) continue;
+    if (process == ProcessState::kRunning && now - m.last_heard <= starved_timeout_) continue;
     m.alive = false;
     m.ready = false;
     m.ready_announced = false;
-    m.failure = why;
+    m.failure = "sent no heartbeat for " +
+                std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(now - m.last_heard).count()) +
+                " ms (" + (process == ProcessState::kGone      ? "its process is gone"
+                           : process == ProcessState::kStopped ? "its process is stopped"
+                           : process == ProcessState::kRunning ? "its process runs but is hung"
+                                                               : "crashed, hung or stopped") +
+                "; pid " + std::to_string(m.pid) + ")";
     spdlog::error("service '{}' {}", name, m.failure);
     changed = true;
   }

@@ -38,8 +38,9 @@ std::map<std::string, std::string> Attributes(const msg::SpawnActor& s) {
 
 }  // namespace
 
-GroundService::GroundService(Bus& bus, std::string name)
+GroundService::GroundService(Bus& bus, std::string name, std::string output_dir)
     : name_(std::move(name)),
+      output_dir_(std::move(output_dir)),
       state_writer_(bus, topics::kGroundState),
       events_writer_(bus, topics::kPhysicsEvents),
       event_writer_(bus, topics::kEvent),
@@ -95,6 +96,7 @@ void GroundService::BeginRun(const msg::WorldInfo& world) {
   if (s.max_substep_delta_time() > 0) physics_.max_substep_delta_time = s.max_substep_delta_time();
   if (s.max_substeps() > 0) physics_.max_substeps = static_cast<int>(s.max_substeps());
   seed_ = world.seed();
+  log_.reset();
   world_ = std::make_unique<ground::World>(town_, seed_, physics_);
   wait_for_air_ = false;
   for (const auto& r : world.required_services()) {
@@ -290,6 +292,11 @@ void GroundService::Step(const msg::Tick& tick) {
   ExternalBodies(tick);
   world_->Step(tick.dt());
   if (replaying()) return;
+  if (!output_dir_.empty()) {
+    // A replacement taking over mid-run appends to the files of the one it replaces.
+    if (!log_) log_ = std::make_unique<ground::RunLog>(output_dir_ + "/run" + std::to_string(tick.run()) + "/ground", tick.frame() <= 2);
+    log_->Write(*world_, tick.frame(), tick.sim_time());
+  }
   msg::FrameStamp stamp;
   stamp.run(tick.run());
   stamp.frame(tick.frame());

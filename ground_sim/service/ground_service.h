@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 
+#include "lockstep/ground/run_log.h"
 #include "lockstep/ground/world.h"
 #include "lockstep/runtime/frame_buffer.h"
 #include "lockstep/runtime/service.h"
@@ -15,7 +16,9 @@ namespace lockstep {
 
 class GroundService final : public ServiceCore {
  public:
-  explicit GroundService(Bus& bus, std::string name = "ground_sim");
+  // output_dir: the run's files go to <output_dir>/run<N>/ground/ (vehicles.csv,
+  // infractions.json); empty = none.
+  explicit GroundService(Bus& bus, std::string name = "ground_sim", std::string output_dir = "");
   void BeginRun(const msg::WorldInfo& world) override;
   void Step(const msg::Tick& tick) override;
   std::vector<msg::BlueprintDeclaration> Blueprints() const override;
@@ -38,6 +41,8 @@ class GroundService final : public ServiceCore {
   msg::PhysicsEvents PublishEvents(const msg::FrameStamp& stamp) const;
 
   std::string name_;
+  std::string output_dir_;
+  std::unique_ptr<ground::RunLog> log_;
   Writer<msg::GroundState> state_writer_;
   Writer<msg::PhysicsEvents> events_writer_;
   Writer<msg::SimEvent> event_writer_;

@@ -4,6 +4,6 @@
 
 int main(int argc, char** argv) {
   return lockstep::RunServiceMain(argc, argv, "ground_sim", false, [](lockstep::ServiceContext& ctx) {
-    return std::make_unique<lockstep::GroundService>(*ctx.bus, ctx.name);
+    return std::make_unique<lockstep::GroundService>(*ctx.bus, ctx.name, ctx.config.output_dir);
   });
 }

@@ -51,6 +51,9 @@ struct TmState {
   double random_draw_timer = 0;
   uint64_t ignore_draw_key = 0;          // junction entry the ignore-lights draw was made for
   bool ignore_light = false;
+  bool ignore_sign = false;              // drawn with ignore_light, for a stop sign there
+  double sign_wait = 0;                  // s stopped at the stop sign ahead
+  uint64_t sign_done_key = 0;            // junction entry whose stop sign it has stopped at
   uint64_t entry_key = 0;                // junction entry ahead (lane key) last step
   double front_to_line = -1;             // m from the front bumper to its stop line last step
   Pose kin_target;                       // kinematic: pose at the end of this step
@@ -171,6 +174,7 @@ struct World::Impl {
   std::vector<Collision> collisions;
   std::vector<LaneInvasion> invasions;
   std::map<std::pair<uint32_t, uint32_t>, Collision> pending_collisions;  // (actor, other) -> sum
+  std::set<std::pair<uint32_t, uint32_t>> last_contacts;  // (actor, other) in contact last step (saved)
   std::vector<ContactRecord> contact_buffer;
   std::vector<dJointFeedback> feedback;
   std::vector<std::pair<size_t, size_t>> feedback_owner;  // feedback index -> contact index
@@ -207,6 +211,7 @@ struct World::Impl {
   void TmVehicle(VehicleActor* v, double dt, std::map<int, std::vector<const VehicleActor*>>* junction_users,
                  const std::vector<Obstacle>& obstacles);
   void FillPath(VehicleActor* v);
+  bool ChangeLane(VehicleActor* v, bool left, const std::vector<Obstacle>* obstacles);
   void MoveKinematic(VehicleActor* v, double dt);
   void AnchorPath(VehicleActor* v);
   void Respawn(VehicleActor* v);

@@ -1,5 +1,7 @@
 // Save / restore of the whole ground state (a replacement ground_sim continues bit for
-// bit) and the state hash (FNV-1a 64 over the same bytes).
+// bit) and the state hash (FNV-1a 64 over the same bytes). Every field is written one by
+// one as a number: a struct written whole would carry its padding bytes (whatever the
+// memory held), and the same state would give different bytes and hashes.
 #include <cstring>
 #include <stdexcept>
 #include <type_traits>
@@ -10,15 +12,19 @@ namespace lockstep::ground {
 namespace {
 
 constexpr uint32_t kMagic = 0x47524E44;  // "GRND"
-constexpr uint32_t kVersion = 1;
+constexpr uint32_t kVersion = 3;  // 2: every field written explicitly (no struct padding); 3: stop signs, contacts of the last step
 
 class Writer {
  public:
   template <class T>
   void Pod(const T& x) {
-    static_assert(std::is_trivially_copyable_v<T>);
-    const auto* p = reinterpret_cast<const uint8_t*>(&x);
-    out.insert(out.end(), p, p + sizeof(T));
+    static_assert(std::is_arithmetic_v<T>, "write structs field by field (padding bytes are not state)");
+    if constexpr (std::is_same_v<T, bool>) {
+      out.push_back(x ? 1 : 0);
+    } else {
+      const auto* p = reinterpret_cast<const uint8_t*>(&x);
+      out.insert(out.end(), p, p + sizeof(T));
+    }
   }
   void Str(const std::string& s) {
     Pod<uint32_t>(static_cast<uint32_t>(s.size()));
@@ -27,7 +33,7 @@ class Writer {
   void V(const Vec3& v) { Pod(v.x()), Pod(v.y()), Pod(v.z()); }
   void Q(const Quat& q) { Pod(q.w()), Pod(q.x()), Pod(q.y()), Pod(q.z()); }
   void P(const Pose& p) { V(p.position), Q(p.orientation); }
-  void Wp(const map::Waypoint& w) { Pod(w.road), Pod(w.section), Pod(w.lane), Pod(w.s); }
+  void Wp(const map::Waypoint& w) { Pod<int32_t>(w.road), Pod<int32_t>(w.section), Pod<int32_t>(w.lane), Pod(w.s); }
   std::vector<uint8_t> out;
 };
 
@@ -36,12 +42,18 @@ class Reader {
   explicit Reader(const std::vector<uint8_t>& b) : bytes(b) {}
   template <class T>
   T Pod() {
-    static_assert(std::is_trivially_copyable_v<T>);
+    static_assert(std::is_arithmetic_v<T>, "read structs field by field");
     if (at + sizeof(T) > bytes.size()) throw std::runtime_error("ground state: truncated");
-    T x;
-    std::memcpy(&x, bytes.data() + at, sizeof(T));
-    at += sizeof(T);
-    return x;
+    if constexpr (std::is_same_v<T, bool>) {
+      const uint8_t b = bytes[at++];
+      if (b > 1) throw std::runtime_error("ground state: corrupt flag");
+      return b == 1;
+    } else {
+      T x;
+      std::memcpy(&x, bytes.data() + at, sizeof(T));
+      at += sizeof(T);
+      return x;
+    }
   }
   template <class T>
   void Get(T* x) { *x = Pod<T>(); }
@@ -67,7 +79,7 @@ class Reader {
     return p;
   }
   map::Waypoint Wp(const map::Map& m) {
-    const int road = Pod<int>(), section = Pod<int>(), lane = Pod<int>();
+    const int road = Pod<int32_t>(), section = Pod<int32_t>(), lane = Pod<int32_t>();
     const double s = Pod<double>();
     return m.MakeWaypoint(road, section, lane, s);
   }
@@ -75,11 +87,103 @@ class Reader {
   size_t at = 0;
 };
 
+void PutSettings(Writer& w, const PhysicsSettings& s) {
+  w.Pod(s.substepping), w.Pod(s.max_substep_delta_time), w.Pod<int32_t>(s.max_substeps);
+}
+PhysicsSettings GetSettings(Reader& r) {
+  PhysicsSettings s;
+  r.Get(&s.substepping), r.Get(&s.max_substep_delta_time);
+  s.max_substeps = r.Pod<int32_t>();
+  return s;
+}
+
+void PutTmGlobal(Writer& w, const TmGlobal& t) {
+  for (double x : {t.distance_to_leading_vehicle, t.percentage_speed_difference, t.ignore_lights_percentage,
+                   t.ignore_signs_percentage, t.ignore_vehicles_percentage, t.ignore_walkers_percentage, t.keep_right_percentage,
+                   t.random_left_lanechange_percentage, t.random_right_lanechange_percentage, t.hybrid_physics_radius,
+                   t.blocked_time_threshold, t.red_light_blocked_time_threshold})
+    w.Pod(x);
+  for (bool b : {t.auto_lane_change, t.hybrid_physics_mode, t.synchronous_mode, t.respawn_dormant_vehicles}) w.Pod(b);
+  w.Pod(t.random_seed);
+}
+void GetTmGlobal(Reader& r, TmGlobal* t) {
+  for (double* x : {&t->distance_to_leading_vehicle, &t->percentage_speed_difference, &t->ignore_lights_percentage,
+                    &t->ignore_signs_percentage, &t->ignore_vehicles_percentage, &t->ignore_walkers_percentage,
+                    &t->keep_right_percentage, &t->random_left_lanechange_percentage, &t->random_right_lanechange_percentage,
+                    &t->hybrid_physics_radius, &t->blocked_time_threshold, &t->red_light_blocked_time_threshold})
+    *x = r.Pod<double>();
+  for (bool* b : {&t->auto_lane_change, &t->hybrid_physics_mode, &t->synchronous_mode, &t->respawn_dormant_vehicles})
+    *b = r.Pod<bool>();
+  r.Get(&t->random_seed);
+}
+
+void PutTmParams(Writer& w, const TmVehicleParams& p) {
+  for (double x : {p.distance_to_leading_vehicle, p.percentage_speed_difference, p.desired_speed, p.ignore_lights_percentage,
+                   p.ignore_signs_percentage, p.ignore_vehicles_percentage, p.ignore_walkers_percentage, p.auto_lane_change,
+                   p.keep_right_percentage, p.random_left_lanechange_percentage, p.random_right_lanechange_percentage})
+    w.Pod(x);
+  w.Pod(p.update_lights);
+}
+void GetTmParams(Reader& r, TmVehicleParams* p) {
+  for (double* x : {&p->distance_to_leading_vehicle, &p->percentage_speed_difference, &p->desired_speed,
+                    &p->ignore_lights_percentage, &p->ignore_signs_percentage, &p->ignore_vehicles_percentage,
+                    &p->ignore_walkers_percentage, &p->auto_lane_change, &p->keep_right_percentage,
+                    &p->random_left_lanechange_percentage, &p->random_right_lanechange_percentage})
+    *x = r.Pod<double>();
+  r.Get(&p->update_lights);
+}
+
+void PutLight(Writer& w, const LightState& l) {
+  w.Pod<int32_t>(static_cast<int32_t>(l.color)), w.Pod(l.elapsed), w.Pod(l.green_time), w.Pod(l.yellow_time), w.Pod(l.red_time);
+  w.Pod(l.frozen), w.Pod<int32_t>(l.group);
+}
+LightState GetLight(Reader& r) {
+  LightState l;
+  const auto color = r.Pod<int32_t>();
+  if (color < 0 || color > static_cast<int32_t>(LightColor::kUnknown)) throw std::runtime_error("ground state: bad light colour");
+  l.color = static_cast<LightColor>(color);
+  r.Get(&l.elapsed), r.Get(&l.green_time), r.Get(&l.yellow_time), r.Get(&l.red_time), r.Get(&l.frozen);
+  l.group = r.Pod<int32_t>();
+  return l;
+}
+
+void PutControl(Writer& w, const VehicleControl& c) {
+  w.Pod(c.throttle), w.Pod(c.steer), w.Pod(c.brake), w.Pod(c.hand_brake), w.Pod(c.reverse), w.Pod(c.manual_gear_shift);
+  w.Pod<int32_t>(c.gear);
+}
+VehicleControl GetControl(Reader& r) {
+  VehicleControl c;
+  r.Get(&c.throttle), r.Get(&c.steer), r.Get(&c.brake), r.Get(&c.hand_brake), r.Get(&c.reverse), r.Get(&c.manual_gear_shift);
+  c.gear = r.Pod<int32_t>();
+  return c;
+}
+
+void PutAckermann(Writer& w, const AckermannControl& a) {
+  w.Pod(a.steer), w.Pod(a.steer_speed), w.Pod(a.speed), w.Pod(a.acceleration), w.Pod(a.jerk);
+}
+AckermannControl GetAckermann(Reader& r) {
+  AckermannControl a;
+  r.Get(&a.steer), r.Get(&a.steer_speed), r.Get(&a.speed), r.Get(&a.acceleration), r.Get(&a.jerk);
+  return a;
+}
+
+void PutInfractions(Writer& w, const Infractions& f) {
+  for (int x : {f.red_lights, f.vehicle_collisions, f.walker_collisions, f.static_collisions, f.lane_invasions, f.stop_signs})
+    w.Pod<int32_t>(x);
+}
+Infractions GetInfractions(Reader& r) {
+  Infractions f;
+  for (int* x : {&f.red_lights, &f.vehicle_collisions, &f.walker_collisions, &f.static_collisions, &f.lane_invasions,
+                 &f.stop_signs})
+    *x = r.Pod<int32_t>();
+  return f;
+}
+
 void PutPhysics(Writer& w, const VehiclePhysics& p) {
   w.Pod<uint32_t>(static_cast<uint32_t>(p.torque_curve.size()));
   for (auto [r, t] : p.torque_curve) w.Pod(r), w.Pod(t);
   w.Pod<uint32_t>(static_cast<uint32_t>(p.forward_gears.size()));
-  for (const auto& g : p.forward_gears) w.Pod(g);
+  for (const auto& g : p.forward_gears) w.Pod(g.ratio), w.Pod(g.down_ratio), w.Pod(g.up_ratio);
   for (double x : {p.max_rpm, p.moi, p.damping_rate_full_throttle, p.gear_switch_time, p.clutch_strength, p.final_ratio, p.mass,
                    p.drag_coefficient, p.frontal_area, p.tire_friction, p.wheel_radius, p.max_steer_angle, p.max_brake_torque,
                    p.max_handbrake_torque, p.suspension_stiffness, p.suspension_damping, p.suspension_travel, p.wheelbase,
@@ -94,7 +198,7 @@ VehiclePhysics GetPhysics(Reader& r) {
   p.torque_curve.resize(r.Pod<uint32_t>());
   for (auto& [a, b] : p.torque_curve) a = r.Pod<double>(), b = r.Pod<double>();
   p.forward_gears.resize(r.Pod<uint32_t>());
-  for (auto& g : p.forward_gears) g = r.Pod<GearSpec>();
+  for (auto& g : p.forward_gears) r.Get(&g.ratio), r.Get(&g.down_ratio), r.Get(&g.up_ratio);
   for (double* x : {&p.max_rpm, &p.moi, &p.damping_rate_full_throttle, &p.gear_switch_time, &p.clutch_strength, &p.final_ratio,
                     &p.mass, &p.drag_coefficient, &p.frontal_area, &p.tire_friction, &p.wheel_radius, &p.max_steer_angle,
                     &p.max_brake_torque, &p.max_handbrake_torque, &p.suspension_stiffness, &p.suspension_damping,
@@ -122,8 +226,17 @@ void PutBody(Writer& w, dBodyID b) {
   w.V(ToVec(dBodyGetAngularVel(b)));
   w.Pod<bool>(dBodyIsKinematic(b) != 0);
 }
+// The saved orientation exactly: dBodySetQuaternion normalises again, which can move the
+// last bit, and the restored world would then drift from the one that was saved.
+void SetExactPose(dBodyID b, const Pose& p) {
+  SetBodyPose(b, p);  // position, geoms marked moved
+  auto* q = const_cast<dReal*>(dBodyGetQuaternion(b));  // ODE's own storage (documented as such)
+  q[0] = p.orientation.w(), q[1] = p.orientation.x(), q[2] = p.orientation.y(), q[3] = p.orientation.z();
+  dQtoR(q, const_cast<dReal*>(dBodyGetRotation(b)));  // what each ODE step does after normalising
+}
+
 void GetBody(Reader& r, dBodyID b) {
-  SetBodyPose(b, r.P());
+  SetExactPose(b, r.P());
   const Vec3 v = r.V(), a = r.V();
   const bool kinematic = r.Pod<bool>();
   if (kinematic) dBodySetKinematic(b);
@@ -158,22 +271,28 @@ void PutTm(Writer& w, const TmState& s) {
   PutWaypoints(w, s.path);
   PutWaypoints(w, s.planned);
   w.Pod<uint32_t>(static_cast<uint32_t>(s.route.size()));
-  for (int x : s.route) w.Pod(x);
-  w.Pod(s.rng.s), w.Pod(s.speed), w.Pod(s.blocked), w.Pod(s.committed_junction), w.Pod(s.waiting), w.Pod(s.lane_change);
+  for (int x : s.route) w.Pod<int32_t>(x);
+  w.Pod(s.rng.s), w.Pod(s.speed), w.Pod(s.blocked), w.Pod<int32_t>(s.committed_junction), w.Pod(s.waiting), w.Pod<int32_t>(s.lane_change);
   w.Pod(s.lane_change_cooldown), w.Pod(s.random_draw_timer), w.Pod(s.ignore_draw_key), w.Pod(s.ignore_light);
-  w.Pod(s.entry_key), w.Pod(s.front_to_line), w.P(s.kin_target), w.Pod(s.params), w.Pod(s.target_speed);
-  w.Pod(s.steer_angle), w.Pod(s.light), w.Pod(s.light_distance);
+  w.Pod(s.ignore_sign), w.Pod(s.sign_wait), w.Pod(s.sign_done_key);
+  w.Pod(s.entry_key), w.Pod(s.front_to_line), w.P(s.kin_target), PutTmParams(w, s.params), w.Pod(s.target_speed);
+  w.Pod(s.steer_angle), w.Pod<int32_t>(s.light), w.Pod(s.light_distance);
 }
 void GetTm(Reader& r, const map::Map& m, TmState* s) {
   s->path = GetWaypoints(r, m);
   s->planned = GetWaypoints(r, m);
   s->route.resize(r.Pod<uint32_t>());
-  for (int& x : s->route) x = r.Pod<int>();
-  r.Get(&s->rng.s), r.Get(&s->speed), r.Get(&s->blocked), r.Get(&s->committed_junction), r.Get(&s->waiting), r.Get(&s->lane_change);
+  for (int& x : s->route) x = r.Pod<int32_t>();
+  r.Get(&s->rng.s), r.Get(&s->speed), r.Get(&s->blocked), s->committed_junction = r.Pod<int32_t>();
+  r.Get(&s->waiting);
+  s->lane_change = r.Pod<int32_t>();
   r.Get(&s->lane_change_cooldown), r.Get(&s->random_draw_timer), r.Get(&s->ignore_draw_key), r.Get(&s->ignore_light);
+  r.Get(&s->ignore_sign), r.Get(&s->sign_wait), r.Get(&s->sign_done_key);
   r.Get(&s->entry_key), r.Get(&s->front_to_line);
   s->kin_target = r.P();
-  r.Get(&s->params), r.Get(&s->target_speed), r.Get(&s->steer_angle), r.Get(&s->light), r.Get(&s->light_distance);
+  GetTmParams(r, &s->params), r.Get(&s->target_speed), r.Get(&s->steer_angle);
+  s->light = r.Pod<int32_t>();
+  r.Get(&s->light_distance);
 }
 
 }  // namespace
@@ -181,19 +300,20 @@ void GetTm(Reader& r, const map::Map& m, TmState* s) {
 std::vector<uint8_t> World::Save() const {
   const Impl& I = *impl_;
   Writer w;
-  w.Pod(kMagic), w.Pod(kVersion), w.Pod(I.town->Hash()), w.Pod(I.seed), w.Pod(I.frame), w.Pod(I.settings), w.Pod(I.tm);
+  w.Pod(kMagic), w.Pod(kVersion), w.Pod(I.town->Hash()), w.Pod(I.seed), w.Pod(I.frame);
+  PutSettings(w, I.settings), PutTmGlobal(w, I.tm);
   w.Pod(I.tm_rng.s);
   w.Pod<uint32_t>(static_cast<uint32_t>(I.lights.size()));
-  for (const auto& l : I.lights) w.Pod(l);
-  for (size_t g = 0; g < I.group_current.size(); ++g) w.Pod(I.group_current[g]), w.Pod<bool>(I.group_all_red[g]);
+  for (const auto& l : I.lights) PutLight(w, l);
+  for (size_t g = 0; g < I.group_current.size(); ++g) w.Pod<int32_t>(I.group_current[g]), w.Pod<bool>(I.group_all_red[g]);
   w.Pod<uint32_t>(static_cast<uint32_t>(I.vehicles.size()));
   for (const auto& [id, vp] : I.vehicles) {
     const VehicleActor& v = *vp;
     w.Pod(v.id), w.Str(v.blueprint), PutAttributes(w, v.attributes), PutPhysics(w, v.physics), PutBody(w, v.body);
-    w.Pod(v.control), w.Pod(v.use_ackermann), w.Pod(v.ackermann), w.Pod(v.ackermann_integral), w.Pod(v.steer_angle);
-    w.Pod(v.simulate_physics), w.Pod(v.kinematic), w.Pod(v.gear), w.Pod(v.gear_timer), w.V(v.prev_velocity), w.V(v.acceleration);
+    PutControl(w, v.control), w.Pod(v.use_ackermann), PutAckermann(w, v.ackermann), w.Pod(v.ackermann_integral), w.Pod(v.steer_angle);
+    w.Pod(v.simulate_physics), w.Pod(v.kinematic), w.Pod<int32_t>(v.gear), w.Pod(v.gear_timer), w.V(v.prev_velocity), w.V(v.acceleration);
     w.Pod(v.light_state), w.Pod(v.autopilot), PutTm(w, v.tm), PutFootprint(w, v.footprint), w.Pod(v.has_footprint), w.Pod(v.speed_limit);
-    w.Pod(v.opposite_lane), w.Pod(v.sidewalk), w.Pod(v.infractions);
+    w.Pod(v.opposite_lane), w.Pod(v.sidewalk), PutInfractions(w, v.infractions);
   }
   w.Pod<uint32_t>(static_cast<uint32_t>(I.walkers.size()));
   for (const auto& [id, wp] : I.walkers) {
@@ -208,6 +328,8 @@ std::vector<uint8_t> World::Save() const {
     PutWaypoints(w, c.path);
     w.Pod(c.rng.s);
   }
+  w.Pod<uint32_t>(static_cast<uint32_t>(I.last_contacts.size()));
+  for (const auto& [a, b] : I.last_contacts) w.Pod(a), w.Pod(b);
   return std::move(w.out);
 }
 
@@ -218,17 +340,17 @@ std::unique_ptr<World> World::Restore(std::shared_ptr<const Town> town, const st
   if (r.Pod<uint64_t>() != town->Hash()) throw std::runtime_error("ground state: saved on another town");
   const auto seed = r.Pod<uint64_t>();
   const auto frame = r.Pod<uint64_t>();
-  const auto settings = r.Pod<PhysicsSettings>();
+  const PhysicsSettings settings = GetSettings(r);
   auto world = std::make_unique<World>(town, seed, settings);
   Impl& I = *world->impl_;
   const map::Map& m = town->Map();
   I.frame = frame;
-  r.Get(&I.tm);
+  GetTmGlobal(r, &I.tm);
   r.Get(&I.tm_rng.s);
   if (r.Pod<uint32_t>() != I.lights.size()) throw std::runtime_error("ground state: traffic light count differs");
-  for (auto& l : I.lights) l = r.Pod<LightState>();
+  for (auto& l : I.lights) l = GetLight(r);
   for (size_t g = 0; g < I.group_current.size(); ++g) {
-    I.group_current[g] = r.Pod<int>();
+    I.group_current[g] = r.Pod<int32_t>();
     I.group_all_red[g] = r.Pod<bool>();
   }
   const auto nv = r.Pod<uint32_t>();
@@ -243,14 +365,19 @@ std::unique_ptr<World> World::Restore(std::shared_ptr<const Town> town, const st
     const VehiclePhysics phys = GetPhysics(r);
     world->SetVehiclePhysics(id, phys);
     GetBody(r, v.body);
-    r.Get(&v.control), r.Get(&v.use_ackermann), r.Get(&v.ackermann), r.Get(&v.ackermann_integral), r.Get(&v.steer_angle);
-    r.Get(&v.simulate_physics), r.Get(&v.kinematic), r.Get(&v.gear), r.Get(&v.gear_timer);
+    v.control = GetControl(r);
+    r.Get(&v.use_ackermann);
+    v.ackermann = GetAckermann(r);
+    r.Get(&v.ackermann_integral), r.Get(&v.steer_angle);
+    r.Get(&v.simulate_physics), r.Get(&v.kinematic);
+    v.gear = r.Pod<int32_t>();
+    r.Get(&v.gear_timer);
     v.prev_velocity = r.V();
     v.acceleration = r.V();
     r.Get(&v.light_state), r.Get(&v.autopilot);
     GetTm(r, m, &v.tm);
     v.footprint = GetFootprint(r), r.Get(&v.has_footprint), r.Get(&v.speed_limit), r.Get(&v.opposite_lane), r.Get(&v.sidewalk);
-    r.Get(&v.infractions);
+    v.infractions = GetInfractions(r);
   }
   const auto nw = r.Pod<uint32_t>();
   for (uint32_t k = 0; k < nw; ++k) {
@@ -275,6 +402,11 @@ std::unique_ptr<World> World::Restore(std::shared_ptr<const Town> town, const st
     c.path = GetWaypoints(r, m);
     r.Get(&c.rng.s);
     I.controllers.emplace(c.id, std::move(c));
+  }
+  const auto ncontacts = r.Pod<uint32_t>();
+  for (uint32_t k = 0; k < ncontacts; ++k) {
+    const auto a = r.Pod<uint32_t>();
+    I.last_contacts.emplace(a, r.Pod<uint32_t>());
   }
   if (r.at != bytes.size()) throw std::runtime_error("ground state: trailing bytes");
   return world;

@@ -1,6 +1,9 @@
 #include "lockstep/ground/town.h"
 
+#include <cmath>
+#include <cstdlib>
 #include <cstring>
+#include <limits>
 
 #include "lockstep/map/scene_mesh.h"
 
@@ -23,6 +26,10 @@ Town::Town(map::Map map, std::vector<map::Mesh> meshes) : map_(std::move(map)), 
     const int index = static_cast<int>(lights_.size());
     for (const auto& wp : info.stop_waypoints) lane_light_.emplace(std::make_tuple(wp.road, wp.section, wp.lane), index);
     lights_.push_back(std::move(l));
+  }
+  signs_ = map_.StopSigns();
+  for (size_t i = 0; i < signs_.size(); ++i) {
+    for (const auto& wp : signs_[i].stop_waypoints) lane_sign_.emplace(std::make_tuple(wp.road, wp.section, wp.lane), static_cast<int>(i));
   }
   spawn_points_ = map_.SpawnPoints();
   walker_spawn_points_ = map_.PedestrianSpawnPoints();
@@ -54,6 +61,35 @@ std::shared_ptr<const Town> Town::Load(const std::string& xodr_path, uint64_t sc
   map::Map m = map::Map::Load(xodr_path);
   const map::Scene scene = map::GenerateScene(m, scene_seed);
   return Build(std::move(m), scene);
+}
+
+double Town::SignSpeedLimit(const map::Waypoint& wp) const {
+  double best = std::numeric_limits<double>::quiet_NaN(), best_behind = std::numeric_limits<double>::infinity();
+  if (wp.road < 0) return best;
+  const auto& road = map_.Data().roads[static_cast<size_t>(wp.road)];
+  const bool forward = wp.lane < 0;
+  auto consider = [&](double s, double t, const std::string& orientation, double mps) {
+    // The sign's side of the road (or its orientation) says which direction it serves.
+    const bool serves = orientation == "+" ? forward : orientation == "-" ? !forward : (t <= 0) == forward;
+    const double behind = forward ? wp.s - s : s - wp.s;
+    if (!serves || !std::isfinite(mps) || mps <= 0 || behind < -1e-6 || behind >= best_behind) return;
+    best_behind = behind;
+    best = mps;
+  };
+  for (const auto& sig : road.signals) {
+    if (sig.type != "274") continue;  // OpenDRIVE's "maximum speed"
+    consider(sig.s, sig.t, sig.orientation, sig.unit == "mph" ? sig.value * 0.44704 : sig.unit == "m/s" ? sig.value : sig.value / 3.6);
+  }
+  for (const auto& o : road.objects) {
+    // RoadRunner exports (CARLA towns) place the signs as objects "Speed_<km/h>".
+    if (o.name.rfind("Speed_", 0) == 0) consider(o.s, o.t, "", std::atof(o.name.c_str() + 6) / 3.6);
+  }
+  return best;
+}
+
+int Town::SignOfLane(int road, int section, int lane) const {
+  auto it = lane_sign_.find(std::make_tuple(road, section, lane));
+  return it == lane_sign_.end() ? -1 : it->second;
 }
 
 int Town::LightOfLane(int road, int section, int lane) const {

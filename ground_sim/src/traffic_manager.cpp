@@ -13,9 +13,11 @@ namespace {
 constexpr double kSpacing = 2.0;           // m between path points
 constexpr double kComfortDecel = 3.0;      // m/s^2 for planned stops
 constexpr double kYellowDecel = 4.0;       // m/s^2: stop on yellow if this suffices
-constexpr double kMaxAccel = 3.5;          // m/s^2, kinematic mode
-constexpr double kMaxDecel = 8.0;          // m/s^2, kinematic mode
 constexpr double kMaxLateralAccel = 4.0;   // m/s^2 in curves
+constexpr double kStopSignTime = 2.0;      // s of full stop at a stop sign (docs/ground.md)
+constexpr double kLaneObstacleDistance = 50.0;  // m: a slower leader this close triggers a lane change (CARLA)
+constexpr double kLaneChangeCooldown = 5.0;     // s between two lane changes of a vehicle
+
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 double Get(double per_vehicle, double global) { return std::isnan(per_vehicle) ? global : per_vehicle; }
@@ -122,8 +124,9 @@ void World::Impl::AnchorPath(VehicleActor* v) {
 void World::Impl::MoveKinematic(VehicleActor* v, double dt) {
   auto& tm_state = v->tm;
   const double target = tm_state.target_speed;
-  tm_state.speed = std::clamp(target, tm_state.speed - kMaxDecel * dt, tm_state.speed + kMaxAccel * dt);
-  tm_state.speed = std::max(0.0, tm_state.speed);
+  // CARLA's hybrid mode teleports the car by its target velocity x dt each step: no
+  // acceleration limit (MotionPlanStage); stops are in the target's braking profile.
+  tm_state.speed = std::max(0.0, target);
   const auto& path = tm_state.path;
   const Pose pose = BodyPose(v->body);
   Pose out = pose;
@@ -180,6 +183,45 @@ void World::Impl::Respawn(VehicleActor* v) {
     v->has_footprint = false;
     return;
   }
+}
+
+// Moves the buffer over to the neighbouring lane of the same direction: the old lane up
+// to ~6 m ahead, then the new lane 8 m further on. With `obstacles`, only if no vehicle
+// or walker is on the new lane from 15 m behind to 20 m ahead (forced changes skip it).
+bool World::Impl::ChangeLane(VehicleActor* v, bool left, const std::vector<Obstacle>* obstacles) {
+  const map::Map& m = town->Map();
+  auto& path = v->tm.path;
+  size_t at = 0;
+  double length = 0;
+  for (at = 1; at < path.size() && length < 6.0; ++at) length += (Loc(path[at]) - Loc(path[at - 1])).norm();
+  if (at >= path.size()) return false;
+  for (size_t k = 0; k <= at; ++k) {
+    if (path[k].IsJunction()) return false;
+  }
+  const auto side = left ? m.LeftLane(path[at]) : m.RightLane(path[at]);
+  if (!side || side->lane_type != map::LaneType::Driving || (side->lane < 0) != (path[at].lane < 0) || side->IsJunction()) return false;
+  const auto ahead = m.Next(*side, 8.0);
+  if (ahead.empty() || ahead.front().IsJunction()) return false;
+  if (obstacles) {
+    std::vector<Vec3> lane{Loc(*side)};
+    for (double d : {5.0, 10.0, 15.0}) {
+      if (auto b = m.Previous(*side, d); !b.empty()) lane.push_back(Loc(b.front()));
+    }
+    for (double d : {5.0, 10.0, 15.0, 20.0}) {
+      if (auto f = m.Next(*side, d); !f.empty()) lane.push_back(Loc(f.front()));
+    }
+    for (const Obstacle& o : *obstacles) {
+      if (o.id == v->id) continue;
+      for (const Vec3& p : lane) {
+        if ((o.position - p).head<2>().norm() < 2.5 + std::max(o.half_x, o.half_y) && std::abs(o.position.z() - p.z()) < 4.0) return false;
+      }
+    }
+  }
+  path.erase(path.begin() + static_cast<std::ptrdiff_t>(at) + 1, path.end());
+  path.push_back(ahead.front());
+  v->tm.planned.clear();
+  v->tm.lane_change_cooldown = kLaneChangeCooldown;
+  return true;
 }
 
 void World::Impl::StepTrafficManager(double dt) {
@@ -253,6 +295,7 @@ void World::Impl::TmVehicle(VehicleActor* v, double dt, std::map<int, std::vecto
   const double half_x = v->spec->half_extents.x(), half_y = v->spec->half_extents.y();
   s.light = -1;
   s.light_distance = -1;
+  double stop_distance = kInf;  // m the front bumper may still travel (stop line, leader)
   if (path.size() < 2) {
     s.target_speed = 0;
   } else {
@@ -265,7 +308,8 @@ void World::Impl::TmVehicle(VehicleActor* v, double dt, std::map<int, std::vecto
 
     double limit = Get(s.params.desired_speed, kInf);
     if (!std::isfinite(limit)) {
-      v->speed_limit = m.SpeedLimit(path[1]);
+      // CARLA: the limit of the last speed sign passed (sticky across roads).
+      if (const double sign = town->SignSpeedLimit(path[0]); std::isfinite(sign)) v->speed_limit = sign;
       limit = v->speed_limit * (1.0 - Get(s.params.percentage_speed_difference, tm.percentage_speed_difference) / 100.0);
     }
     double target = std::max(0.0, limit);
@@ -292,13 +336,34 @@ void World::Impl::TmVehicle(VehicleActor* v, double dt, std::map<int, std::vecto
       const uint64_t key = LaneKey(path[i]);
       const int light = town->LightOfLane(path[i].road, path[i].section, path[i].lane);
       bool must_stop = false;
+      if (s.ignore_draw_key != key) {
+        // Once per junction entry: will it run this light / this stop sign?
+        s.ignore_draw_key = key;
+        s.ignore_light = s.rng.Percent(Get(s.params.ignore_lights_percentage, tm.ignore_lights_percentage));
+        s.ignore_sign = s.rng.Percent(Get(s.params.ignore_signs_percentage, tm.ignore_signs_percentage));
+      }
+      if (s.entry_key != key) s.sign_done_key = 0, s.sign_wait = 0;  // a new junction entry ahead
+      const int sign = town->SignOfLane(path[i].road, path[i].section, path[i].lane);
+      if (sign >= 0 && light < 0 && town->Signs()[static_cast<size_t>(sign)].type == "206") {
+        // Stop sign: a full stop at the line for kStopSignTime, then the junction's
+        // conflict check decides (yield signs: the conflict check alone).
+        const bool done = s.sign_done_key == key;
+        if (!done && !s.ignore_sign) {
+          must_stop = true;
+          if (front < 2.0 && speed < 0.1) {
+            s.sign_wait += dt;
+            if (s.sign_wait >= kStopSignTime) {
+              s.sign_done_key = key;
+              s.sign_wait = 0;
+              must_stop = false;
+            }
+          }
+        }
+        if (s.entry_key == key && s.front_to_line > 0 && front <= 0 && !done) ++v->infractions.stop_signs;
+      }
       if (light >= 0) {
         s.light = light;
         s.light_distance = std::max(0.0, front);
-        if (s.ignore_draw_key != key) {
-          s.ignore_draw_key = key;
-          s.ignore_light = s.rng.Percent(Get(s.params.ignore_lights_percentage, tm.ignore_lights_percentage));
-        }
         const LightColor c = lights[static_cast<size_t>(light)].color;
         if (!s.ignore_light) {
           if (c == LightColor::kRed) must_stop = front > -0.5;
@@ -368,6 +433,7 @@ void World::Impl::TmVehicle(VehicleActor* v, double dt, std::map<int, std::vecto
     hi += Eigen::Vector2d(8, 8);
     const double ignore_v = Get(s.params.ignore_vehicles_percentage, tm.ignore_vehicles_percentage);
     const double ignore_w = Get(s.params.ignore_walkers_percentage, tm.ignore_walkers_percentage);
+    double lead_gap = kInf, lead_v = 0;  // nearest vehicle ahead on the buffer
     for (const Obstacle& o : obstacles) {
       if (o.id == v->id) continue;
       const Vec3 rel = o.position - pose.position;
@@ -387,12 +453,36 @@ void World::Impl::TmVehicle(VehicleActor* v, double dt, std::map<int, std::vecto
         const double gap = along - half_x - (c * o.half_x + sn * o.half_y);
         const double lead_speed = std::max(0.0, o.velocity.head<2>().dot(dirs[i]));
         const double room = gap - min_gap - 0.5 * speed;
+        if (!o.walker && gap < lead_gap) lead_gap = gap, lead_v = lead_speed;
+        if (lead_speed < 0.5) stop_distance = std::min(stop_distance, gap - min_gap);
         target = std::min(target, room <= 0 ? 0.0 : std::sqrt(lead_speed * lead_speed + 2 * kComfortDecel * room));
         break;
       }
     }
     if (stop_at < kInf) target = std::min(target, stop_at <= 0.05 ? 0.0 : std::sqrt(2 * kComfortDecel * stop_at));
+    stop_distance = std::min(stop_distance, stop_at);
     s.target_speed = target;
+
+    // Lane changes (CARLA's auto_lane_change around a slower leader, the random left /
+    // right percentages and keep-right, drawn once a second), one per kLaneChangeCooldown,
+    // never on a given path or route.
+    s.lane_change_cooldown = std::max(0.0, s.lane_change_cooldown - dt);
+    s.random_draw_timer += dt;
+    if (s.lane_change_cooldown <= 0 && s.planned.empty() && s.route.empty()) {
+      bool changed = false;
+      const bool auto_change = Get(s.params.auto_lane_change, tm.auto_lane_change ? 1.0 : 0.0) != 0;
+      if (auto_change && lead_gap < kLaneObstacleDistance && lead_v < limit - 2.0 && stop_at > lead_gap + 10.0)
+        changed = ChangeLane(v, true, &obstacles) || ChangeLane(v, false, &obstacles);
+      if (!changed && s.random_draw_timer >= 1.0) {
+        s.random_draw_timer = 0;
+        if (s.rng.Percent(Get(s.params.random_left_lanechange_percentage, tm.random_left_lanechange_percentage)))
+          changed = ChangeLane(v, true, &obstacles);
+        if (!changed && s.rng.Percent(Get(s.params.random_right_lanechange_percentage, tm.random_right_lanechange_percentage)))
+          changed = ChangeLane(v, false, &obstacles);
+        if (!changed && s.rng.Percent(Get(s.params.keep_right_percentage, tm.keep_right_percentage)))
+          changed = ChangeLane(v, false, &obstacles);
+      }
+    }
   }
 
   // Blocked vehicles are respawned (CARLA's thresholds; longer at a red light).
@@ -440,6 +530,15 @@ void World::Impl::TmVehicle(VehicleActor* v, double dt, std::map<int, std::vecto
     c.throttle = std::clamp(0.25 + 0.4 * err, 0.0, 1.0);
   } else if (err < -0.6) {
     c.brake = std::clamp(-0.25 * err, 0.0, 1.0);
+  }
+  // Feed-forward for a stop ahead: the deceleration that stops the car in the room left
+  // (full brake is about 1 g); the PI loop alone lags and creeps over stop lines.
+  if (stop_distance < kInf && speed > 0.05) {
+    const double need = speed * speed / (2 * std::max(0.05, stop_distance));
+    if (need > 1.0) {
+      c.throttle = 0;
+      c.brake = std::max(c.brake, std::clamp(need / 9.0, 0.0, 1.0));
+    }
   }
   v->control = c;
   v->use_ackermann = false;
@@ -582,18 +681,11 @@ std::string World::SetRoute(uint32_t id, const std::vector<std::string>& options
 std::string World::ForceLaneChange(uint32_t id, bool left) {
   auto* v = impl_->FindVehicle(id);
   if (!v) return "actor " + std::to_string(id) + " is not a vehicle of ground_sim";
-  const map::Map& m = impl_->town->Map();
   impl_->FillPath(v);
   if (v->tm.path.size() < 2) return "vehicle " + std::to_string(id) + " is not on a road";
-  // Move over about 10 m ahead if a lane travelling our way is there.
-  const size_t at = std::min<size_t>(6, v->tm.path.size() - 1);
-  const map::Waypoint& wp = v->tm.path[at];
-  auto side = left ? m.LeftLane(wp) : m.RightLane(wp);
-  if (!side || side->lane_type != map::LaneType::Driving || (side->lane < 0) != (wp.lane < 0))
-    return "no lane to the " + std::string(left ? "left" : "right") + " in the same direction";
-  while (v->tm.path.size() > at) v->tm.path.pop_back();
-  v->tm.path.push_back(*side);
-  v->tm.planned.clear();
+  // CARLA's force_lane_change: no check for other vehicles on the new lane.
+  if (!impl_->ChangeLane(v, left, nullptr))
+    return "no lane to the " + std::string(left ? "left" : "right") + " in the same direction (or a junction is too near)";
   return {};
 }
 

@@ -21,7 +21,8 @@ void BlockCallback(void* data, dGeomID o1, dGeomID o2) {
   if (dCollide(o1, o2, 1, c, sizeof(dContactGeom)) > 0) q->blocked = true;
 }
 
-constexpr double kArrive = 1.0;  // m: a path point counts as reached
+constexpr double kArrive = 1.0;       // m: a sidewalk path point counts as reached
+constexpr double kGoalReached = 0.2;  // m: go_to_location's destination counts as reached
 
 }  // namespace
 
@@ -37,11 +38,22 @@ void World::Impl::StepWalkers(double dt) {
     if (n > 1e-9 && w.control.speed > 0) step = dir / n * (w.control.speed * dt);
     Vec3 next = pose.position + step;
     if (!step.isZero()) {
-      // Blocked by a wall, pole or building: stay.
-      SetBodyPose(w.body, Pose::FromYaw(next, pose.Yaw()));
-      BlockQuery q;
-      dSpaceCollide2(w.geom, reinterpret_cast<dGeomID>(static_space), &q, &BlockCallback);
-      if (q.blocked) next = pose.position;
+      // Blocked by a wall, pole or building: slide along it (the step turned by 45 and
+      // then 90 degrees, left first), else stay.
+      bool moved = false;
+      for (double turn : {0.0, 0.785398, -0.785398, 1.570796, -1.570796}) {
+        const Eigen::Vector2d d = Eigen::Rotation2Dd(turn) * step.head<2>() * (turn == 0 ? 1.0 : std::cos(turn) + 0.3);
+        const Vec3 candidate = pose.position + Vec3(d.x(), d.y(), 0);
+        SetBodyPose(w.body, Pose::FromYaw(candidate, pose.Yaw()));
+        BlockQuery q;
+        dSpaceCollide2(w.geom, reinterpret_cast<dGeomID>(static_space), &q, &BlockCallback);
+        if (!q.blocked) {
+          next = candidate;
+          moved = true;
+          break;
+        }
+      }
+      if (!moved) next = pose.position;
     }
     bool hit = false;
     const double feet = next.z() - half_h;
@@ -70,7 +82,7 @@ void World::Impl::StepWalkers(double dt) {
   }
 }
 
-void World::Impl::StepControllers(double) {
+void World::Impl::StepControllers(double dt) {
   const map::Map& m = town->Map();
   for (auto& [id, c] : controllers) {
     WalkerActor* w = FindWalker(c.walker);
@@ -81,12 +93,14 @@ void World::Impl::StepControllers(double) {
       // go_to_location: straight towards the goal (no navigation mesh; docs/ground.md).
       Vec3 d = c.goal - pos;
       d.z() = 0;
-      if (d.norm() < kArrive) {
+      if (d.norm() < kGoalReached) {
+        // Arrived; like CARLA's walkers it walks on afterwards (here: the sidewalks).
         c.has_goal = false;
+        c.path.clear();
         w->control.speed = 0;
       } else {
         w->control.direction = d.normalized();
-        w->control.speed = c.max_speed;
+        w->control.speed = std::min(c.max_speed, d.norm() / dt);
       }
       w->control.jump = false;
       continue;
@@ -103,15 +117,29 @@ void World::Impl::StepControllers(double) {
       path.push_back(*start);
     }
     while (path.size() < 4) {
-      auto next = m.Next(path.back(), 2.0);
-      if (next.empty()) next = m.Previous(path.back(), 2.0);
+      // Keep walking the way we go: of the points 2 m on (either lane direction, walkers
+      // walk both ways), those ahead of the last step; at a dead end, turn back.
+      const map::Waypoint& last = path.back();
+      std::vector<map::Waypoint> next = m.Next(last, 2.0);
+      for (auto& p : m.Previous(last, 2.0)) next.push_back(p);
       if (next.empty()) break;
       std::sort(next.begin(), next.end(), [](const map::Waypoint& x, const map::Waypoint& y) {
         return std::make_tuple(x.road, x.lane, x.s) < std::make_tuple(y.road, y.lane, y.s);
       });
-      const auto& pick = next[static_cast<size_t>(c.rng.Next() % next.size())];
-      if ((pick.transform.location - path.back().transform.location).head<2>().norm() < 0.1) break;
-      path.push_back(pick);
+      const Vec3 heading = path.size() >= 2 ? Vec3(last.transform.location - path[path.size() - 2].transform.location)
+                                            : Vec3(pos - last.transform.location) * -1.0;
+      std::vector<map::Waypoint> ahead;
+      for (const auto& p : next) {
+        const Vec3 d = p.transform.location - last.transform.location;
+        if (d.head<2>().norm() > 0.1 && (path.size() < 2 || d.head<2>().dot(heading.head<2>()) > 0)) ahead.push_back(p);
+      }
+      if (ahead.empty()) {
+        for (const auto& p : next) {
+          if ((p.transform.location - last.transform.location).head<2>().norm() > 0.1) ahead.push_back(p);
+        }
+      }
+      if (ahead.empty()) break;
+      path.push_back(ahead[static_cast<size_t>(c.rng.Next() % ahead.size())]);
     }
     Vec3 d = path.front().transform.location - pos;
     d.z() = 0;

@@ -350,8 +350,13 @@ void World::Impl::Substep(double h, bool) {
 
 void World::Impl::FinishEvents() {
   collisions.clear();
+  std::set<std::pair<uint32_t, uint32_t>> touching;
   for (auto& [key, c] : pending_collisions) {
     collisions.push_back(c);
+    touching.insert(key);
+    // The event every step in contact (like CARLA's collision sensor); the infraction
+    // once per contact (not while the car keeps touching the same object).
+    if (last_contacts.count(key)) continue;
     if (auto* v = FindVehicle(c.actor)) {
       switch (c.other_kind) {
         case ObjectKind::kVehicle: ++v->infractions.vehicle_collisions; break;
@@ -361,6 +366,7 @@ void World::Impl::FinishEvents() {
     }
   }
   pending_collisions.clear();
+  last_contacts = std::move(touching);
 }
 
 // Speed limit, footprint measures and lane invasions after the step.
@@ -392,7 +398,13 @@ void World::Impl::UpdateMeasurements(double dt) {
       const auto overlap = map::ComputeFootprintOverlap(m, fp, yaw, 4);
       v.opposite_lane = overlap.opposite_lane;
       v.sidewalk = overlap.sidewalk;
-      v.speed_limit = m.SpeedLimitAt(p.position);
+      // The last speed sign passed on the lane it drives (CARLA's sticky vehicle limit).
+      if (auto wp = m.NearestWaypoint(p.position); wp) {
+        if (std::abs(Wrap(wp->transform.yaw - yaw)) > M_PI / 2) {
+          if (auto other = m.LeftLane(*wp); other && std::abs(Wrap(other->transform.yaw - yaw)) < M_PI / 2) wp = other;
+        }
+        if (const double sign = town->SignSpeedLimit(*wp); std::isfinite(sign)) v.speed_limit = sign;
+      }
     }
     v.footprint = fp;
     v.has_footprint = true;

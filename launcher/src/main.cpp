@@ -5,6 +5,7 @@
 //   lockstep python <script> ...  runs a Python script with `lockstep`, `carla` and `airsim`
 //                                 resolving to Lockstep's packages (docs/python.md)
 #include <CLI/CLI.hpp>
+#include <sys/ioctl.h>
 #include <unistd.h>
 
 #include <chrono>
@@ -12,6 +13,8 @@
 #include <csignal>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <sstream>
 #include <mutex>
 #include <optional>
 
@@ -20,6 +23,7 @@
 #include "lockstep/runtime/launch_config.h"
 #include "lockstep/runtime/log.h"
 #include "lockstep/runtime/shm_sweep.h"
+#include "progress.h"
 #include "supervisor.h"
 
 namespace {
@@ -80,8 +84,79 @@ int Up(const std::string& config_file, int domain) {
     return std::nullopt;
   };
   lockstep::Supervisor supervisor(std::move(children), hung);
+  // Progress: wall time counts from the first tick; the frame and rate are the run's.
+  namespace ll = lockstep::launcher;
+  const bool terminal = isatty(STDOUT_FILENO) != 0;
+  std::optional<std::chrono::steady_clock::time_point> ticking_since;
+  uint64_t last_plain = 0;
+  uint64_t last_frame = 0;
+  std::chrono::steady_clock::time_point last_frame_at;  // when the frame last advanced: the summary's end of ticking
+  auto wall_s = [&](std::chrono::steady_clock::time_point until) {
+    return ticking_since ? std::chrono::duration<double>(until - *ticking_since).count() : 0.0;
+  };
+  supervisor.SetStatusLine(
+      [&]() -> std::string {
+        std::lock_guard<std::mutex> lock(mu);
+        if (!status || status->frame() == 0) return "";
+        if (!ticking_since) {  // first seen mid-run (status comes twice a second): back-date by the ticks done
+          const double done_s = status->tick_rate_hz() > 0 ? static_cast<double>(status->frame()) / status->tick_rate_hz() : 0;
+          ticking_since = std::chrono::steady_clock::now() -
+                          std::chrono::duration_cast<std::chrono::steady_clock::duration>(std::chrono::duration<double>(done_s));
+        }
+        const auto now = std::chrono::steady_clock::now();
+        if (status->frame() != last_frame) {
+          last_frame = status->frame();
+          last_frame_at = now;
+        }
+        ll::Progress p{status->frame(), config.ticks, status->sim_time(), wall_s(now), status->tick_rate_hz(),
+                       lockstep::RunStateName(status->state())};
+        if (!terminal) {
+          if (!ll::PlainLineDue(p.frame, p.total, last_plain)) return "";
+          last_plain = p.frame;
+          return ll::FormatProgress(p, false, 200);
+        }
+        winsize ws{};
+        const size_t width = ioctl(STDOUT_FILENO, TIOCGWINSZ, &ws) == 0 && ws.ws_col > 20 ? ws.ws_col - 1 : 100;
+        return ll::FormatProgress(p, true, width);
+      },
+      terminal);
   const int rc = supervisor.Run(g_stop);
   SweepShm(true);  // what a hung service killed with SIGKILL left behind
+
+  ll::Summary summary;
+  summary.name = config.name;
+  summary.wall_s = wall_s(last_frame_at);
+  {
+    std::lock_guard<std::mutex> lock(mu);
+    if (status) {
+      summary.state = lockstep::RunStateName(status->state());
+      summary.frames = status->frame();
+      summary.sim_time = status->sim_time();
+      if (status->failed_service().size() > 0)
+        summary.failure = status->failed_service().to_string() + ": " + status->reason().to_string();
+      for (const auto& m : status->members())
+        summary.members.push_back({m.service().to_string(), m.kind().to_string(), m.last_frame(), m.last_step_wall_us()});
+    } else {
+      summary.state = "never started";
+    }
+  }
+  if (!config.output_dir.empty() && std::filesystem::exists(config.output_dir)) {
+    summary.output_dir = config.output_dir;
+    summary.outputs = ll::ScanOutputs(config.output_dir);
+    // Each service's own summary (summary.txt in its output folder), as it wrote it.
+    std::error_code ec;
+    for (auto it = std::filesystem::recursive_directory_iterator(config.output_dir, ec);
+         !ec && it != std::filesystem::recursive_directory_iterator(); it.increment(ec)) {
+      if (it->path().filename() != "summary.txt") continue;
+      std::ifstream in(it->path());
+      std::stringstream text;
+      text << in.rdbuf();
+      summary.service_summaries.emplace_back(std::filesystem::relative(it->path(), config.output_dir).string(), text.str());
+    }
+    std::sort(summary.service_summaries.begin(), summary.service_summaries.end());
+  }
+  std::fputs(ll::FormatSummary(summary).c_str(), stdout);
+  std::fflush(stdout);
   return rc;
 }
 

@@ -54,6 +54,7 @@ void Supervisor::KillHung() {
   for (auto& c : children_) {
     if (c.pid <= 0 || c.killed || c.spec.is_coordinator || !c.spec.restart_on_failure) continue;
     if (auto why = hung_(c.spec.name, c.pid)) {
+      ClearStatus();
       std::printf("%-*s | hung (%s): killing pid %d to replace it\n", static_cast<int>(name_width_), c.spec.name.c_str(),
                   why->c_str(), static_cast<int>(c.pid));
       std::fflush(stdout);
@@ -78,6 +79,7 @@ void Supervisor::Drain(Child& c, bool all) {
     if (!all) break;
   }
   size_t pos;
+  if (c.pending.find('\n') != std::string::npos || (c.out_fd < 0 && !c.pending.empty())) ClearStatus();
   while ((pos = c.pending.find('\n')) != std::string::npos) {
     std::printf("%-*s | %s\n", static_cast<int>(name_width_), c.spec.name.c_str(), c.pending.substr(0, pos).c_str());
     c.pending.erase(0, pos + 1);
@@ -125,6 +127,30 @@ void Supervisor::Stop(bool coordinator) {
   }
 }
 
+void Supervisor::SetStatusLine(std::function<std::string()> line, bool terminal) {
+  status_ = std::move(line);
+  terminal_ = terminal;
+}
+
+void Supervisor::ClearStatus() {
+  if (!status_drawn_) return;
+  std::fputs("\r\033[K", stdout);
+  status_drawn_ = false;
+}
+
+void Supervisor::DrawStatus() {
+  if (!status_) return;
+  const std::string line = status_();
+  if (line.empty()) return;
+  if (terminal_) {
+    std::printf("\r\033[K%s", line.c_str());
+    status_drawn_ = true;
+  } else {
+    std::printf("%-*s | %s\n", static_cast<int>(name_width_), "progress", line.c_str());
+  }
+  std::fflush(stdout);
+}
+
 int Supervisor::Run(const std::atomic<bool>& stop) {
   for (auto& c : children_) Start(c);
   int exit_code = 0;
@@ -135,6 +161,7 @@ int Supervisor::Run(const std::atomic<bool>& stop) {
     }
     poll(fds.data(), fds.size(), 100);
     for (auto& c : children_) Drain(c, false);
+    DrawStatus();
     KillHung();
     // Reap children that ended.
     bool done = false;
@@ -146,15 +173,18 @@ int Supervisor::Run(const std::atomic<bool>& stop) {
       const int code = WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);
       c.pid = -1;
       if (c.spec.is_coordinator) {
+        ClearStatus();
         std::printf("%-*s | exited with %d\n", static_cast<int>(name_width_), c.spec.name.c_str(), code);
         exit_code = code;
         done = true;
       } else if ((code != 0 || c.killed) && c.spec.restart_on_failure && c.restarts < 5) {
         ++c.restarts;
+        ClearStatus();
         std::printf("%-*s | failed (%d): starting a replacement (%d of 5)\n", static_cast<int>(name_width_),
                     c.spec.name.c_str(), code, c.restarts);
         Start(c);
       } else {
+        ClearStatus();
         std::printf("%-*s | exited with %d: stopping the simulation\n", static_cast<int>(name_width_), c.spec.name.c_str(), code);
         exit_code = code == 0 ? 1 : code;
         done = true;
@@ -162,6 +192,7 @@ int Supervisor::Run(const std::atomic<bool>& stop) {
     }
     if (done) break;
   }
+  ClearStatus();
   StopAll();
   return exit_code;
 }

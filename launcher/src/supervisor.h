@@ -31,6 +31,9 @@ class Supervisor {
   // Runs until the coordinator exits, a child fails hard, or `stop` is set. Returns the
   // launcher's exit code: 0 when the coordinator finished normally.
   int Run(const std::atomic<bool>& stop);
+  // A status line polled every loop: on a terminal it is redrawn in place below the
+  // children's output; otherwise each non-empty line it returns is printed once.
+  void SetStatusLine(std::function<std::string()> line, bool terminal);
 
  private:
   struct Child {
@@ -46,9 +49,14 @@ class Supervisor {
   void StopAll();                 // the coordinator, then the services
   void Stop(bool coordinator);    // SIGTERM, then SIGKILL after 5 s
   void KillHung();
+  void DrawStatus();
+  void ClearStatus();
   std::vector<Child> children_;
   HangCheck hung_;
   size_t name_width_ = 0;
+  std::function<std::string()> status_;
+  bool terminal_ = false;
+  bool status_drawn_ = false;
 };
 
 }  // namespace lockstep

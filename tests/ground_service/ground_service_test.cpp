@@ -3,6 +3,8 @@
 // controls applied, bad commands rejected with a reason, the Traffic Manager driving.
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <mutex>
 #include <thread>
@@ -44,7 +46,8 @@ class GroundServiceTest : public ::testing::Test {
     });
     observer_ = std::make_unique<testing::Observer>(*bus_);
     coordinator_ = std::make_unique<Coordinator>(*bus_, c);
-    core_ = std::make_unique<GroundService>(*bus_);
+    std::filesystem::remove_all(out_dir_);
+    core_ = std::make_unique<GroundService>(*bus_, "ground_sim", out_dir_);
     runner_ = std::make_unique<ServiceRunner>(*bus_, ServiceOptions{"ground_sim", "ground_sim", false}, *core_);
     runner_thread_ = std::thread([this] { runner_->Run(stop_); });
     coordinator_thread_ = std::thread([this] { coordinator_->Run(stop_); });
@@ -54,6 +57,7 @@ class GroundServiceTest : public ::testing::Test {
     stop_ = true;
     if (coordinator_thread_.joinable()) coordinator_thread_.join();
     if (runner_thread_.joinable()) runner_thread_.join();
+    std::filesystem::remove_all(out_dir_);
   }
   msg::CommandReply Send(msg::CommandBody b) {
     auto r = observer_->WaitReply(observer_->Send(std::move(b)), 20s);
@@ -119,6 +123,7 @@ class GroundServiceTest : public ::testing::Test {
   std::unique_ptr<ServiceRunner> runner_;
   std::thread runner_thread_, coordinator_thread_;
   std::atomic<bool> stop_{false};
+  const std::string out_dir_ = ::testing::TempDir() + "ground_service_out_" + std::to_string(::getpid());
 };
 
 TEST_F(GroundServiceTest, DrivesACarlaBlueprintAndPublishesEveryFrame) {
@@ -152,6 +157,15 @@ TEST_F(GroundServiceTest, DrivesACarlaBlueprintAndPublishesEveryFrame) {
   // Town01's lights are the coordinator's actors 1..n, grouped by junction.
   ASSERT_FALSE(s.traffic_lights().empty());
   for (size_t i = 0; i < s.traffic_lights().size(); ++i) EXPECT_EQ(s.traffic_lights()[i].actor(), i + 1);
+  // The run's files: the vehicle log (rows of this car) and the infraction summary.
+  const std::string dir = out_dir_ + "/run" + std::to_string(s.stamp().run()) + "/ground";
+  std::ifstream csv(dir + "/vehicles.csv");
+  std::string header, row;
+  ASSERT_TRUE(std::getline(csv, header)) << dir;
+  EXPECT_EQ(header.rfind("frame,sim_time_s,id,blueprint", 0), 0u);
+  ASSERT_TRUE(std::getline(csv, row));
+  EXPECT_NE(row.find("," + std::to_string(car) + ",vehicle.tesla.model3,hero,"), std::string::npos) << row;
+  EXPECT_TRUE(std::filesystem::exists(dir + "/infractions.json"));
 }
 
 TEST_F(GroundServiceTest, RejectsWhatItCannotApplyWithAReason) {

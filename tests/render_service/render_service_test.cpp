@@ -3,6 +3,8 @@
 // camera on a climbing drone matches the drone's AirState of the image's frame.
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
+
 #include <iostream>
 #include <list>
 #include <map>
@@ -172,9 +174,14 @@ TEST_F(RenderServiceTest, TwoRenderProcessesShowTheFrameOfThePhysicsState) {
     auto a = air_.find(im.frame);
     ASSERT_NE(a, air_.end());
     ASSERT_EQ(a->second.drones().size(), 1u);
+    // The mount (0.1, 0, -0.1) is in the drone's body frame, which tilts as it climbs.
     const auto& p = a->second.drones()[0].transform().position();
-    EXPECT_NEAR(im.pose.position().z(), p.z() - 0.1, 1e-6) << "frame " << im.frame;
-    EXPECT_NEAR(im.pose.position().x(), p.x() + 0.1, 1e-3) << "frame " << im.frame;
+    const auto& o = a->second.drones()[0].transform().orientation();
+    const Eigen::Vector3d expected =
+        Eigen::Vector3d(p.x(), p.y(), p.z()) + Eigen::Quaterniond(o.w(), o.x(), o.y(), o.z()) * Eigen::Vector3d(0.1, 0, -0.1);
+    EXPECT_NEAR(im.pose.position().x(), expected.x(), 1e-6) << "frame " << im.frame;
+    EXPECT_NEAR(im.pose.position().y(), expected.y(), 1e-6) << "frame " << im.frame;
+    EXPECT_NEAR(im.pose.position().z(), expected.z(), 1e-6) << "frame " << im.frame;
     if (im.frame == last) climbed = p.z() - air_.at(first).drones()[0].transform().position().z();
   }
   EXPECT_GT(climbed, 0.05) << "the drone moves, so a frame mismatch would show in the poses";

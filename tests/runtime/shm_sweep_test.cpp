@@ -20,7 +20,7 @@
 #include <thread>
 
 #include "lockstep/runtime/bus.h"
-#include "lockstep/runtime/domain_lock.h"
+#include "process.h"
 
 namespace lockstep::runtime {
 namespace {
@@ -147,7 +147,7 @@ TEST(ShmSweepFastDds, RemovesTheSegmentOfAKilledParticipantAndKeepsALiveOnes) {
   int ready[2];
   ASSERT_EQ(pipe(ready), 0);
   const auto before = LockFiles();
-  const int domain = LockFreeDdsDomain();
+  const int domain = lockstep::testing::TestDomain();
   const pid_t child = fork();
   ASSERT_GE(child, 0);
   if (child == 0) {

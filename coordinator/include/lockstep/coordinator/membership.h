@@ -36,29 +36,21 @@ struct Member {
   bool ready_announced = false;   // its last announcement said READY
 };
 
-// What the coordinator can tell of a member's process from the outside.
-enum class ProcessState {
-  kUnknown,  // on another host (or no pid): only its heartbeats tell
-  kRunning,  // exists and is not a zombie: silence means hung (stopped, or starved)
-  kGone,     // exited or killed (no such process, or a zombie): dead at once
-};
+// What the operating system says of a member's process, where it can tell.
+enum class ProcessState { kUnknown, kRunning, kStopped, kGone };
+// (host, pid) -> state; kUnknown for a process on another host.
 using ProcessProbe = std::function<ProcessState(const std::string& host, int32_t pid)>;
-
-// How long a member may stay silent before it counts as dead. A process known to be gone
-// is dead as soon as it missed one heartbeat; one known to run gets `hang`, so a loaded
-// machine that delays a heartbeat thread does not fault the run and have the launcher
-// kill a healthy process; one on another host gets `silence`.
-struct HeartbeatTimeouts {
-  std::chrono::steady_clock::duration silence = std::chrono::milliseconds(600);
-  std::chrono::steady_clock::duration hang = std::chrono::milliseconds(600);
-  std::chrono::steady_clock::duration missed = std::chrono::milliseconds(150);  // probe after this
-};
+// Reads /proc for a process on this host (by the host name services announce).
+ProcessState ProbeLocalProcess(const std::string& host, int32_t pid);
 
 class Membership {
  public:
   using Clock = std::chrono::steady_clock;
   Membership(const std::vector<std::string>& required, Clock::duration heartbeat_timeout);
-  Membership(const std::vector<std::string>& required, HeartbeatTimeouts timeouts, ProcessProbe probe);
+  // A member silent for the heartbeat timeout whose process the probe sees running (a
+  // machine so loaded that its heartbeat thread was not scheduled) fails only after
+  // `starved_timeout`; a stopped or vanished one, or one the probe cannot see, at once.
+  void SetProcessProbe(ProcessProbe probe, Clock::duration starved_timeout);
 
   // Each returns true when something a status report shows has changed.
   bool OnAnnounce(const msg::ServiceAnnounce& a, Clock::time_point now);
@@ -68,10 +60,10 @@ class Membership {
   bool OnBlueprints(const std::string& service, long count);
   // A new run (reset, map load): per-run values start again.
   void NewRun(uint32_t run);
-  // Marks members silent for longer than their timeout as dead (crashed or stopped). Time
-  // the caller itself did not run (a gap between two calls well over its 100 ms period:
-  // the coordinator was starved or stopped) counts as heard from: the announcements of
-  // that time are still queued behind it.
+  // Marks members silent for longer than the timeout as dead (crashed or stopped); one
+  // whose process the probe sees gone as soon as it missed a heartbeat (150 ms). Time the
+  // caller itself did not run (a gap of over 200 ms between two calls: it was starved or
+  // stopped) counts as heard from: the announcements of that time are still queued.
   bool CheckHeartbeats(Clock::time_point now);
   // A member that did not finish `frame` in time; it stays dead until it acks it.
   void MarkStalled(const std::string& service, uint64_t frame);
@@ -85,9 +77,10 @@ class Membership {
 
  private:
   std::vector<std::string> required_;
-  HeartbeatTimeouts timeouts_;
+  Clock::duration heartbeat_timeout_;
   ProcessProbe probe_;
-  std::optional<Clock::time_point> last_check_;
+  Clock::duration starved_timeout_{};
+  std::optional<Clock::time_point> last_check_;  // of CheckHeartbeats
   std::map<std::string, Member> members_;  // ordered by name
 };
 

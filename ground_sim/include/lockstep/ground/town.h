@@ -34,6 +34,14 @@ class Town {
   int GroupCount() const { return group_count_; }
   // Index of the light governing the lane (road, section, lane) at its exit, or -1.
   int LightOfLane(int road, int section, int lane) const;
+  // Stop (type "206") and yield ("205") signs of the map with their stop lines.
+  const std::vector<map::TrafficLightInfo>& Signs() const { return signs_; }
+  // Index into Signs() of the sign governing the lane at its exit, or -1.
+  int SignOfLane(int road, int section, int lane) const;
+  // Speed (m/s) of the last speed-limit sign on the waypoint's road behind it in its
+  // travel direction, NaN if none. Vehicles keep the last sign they passed (CARLA's
+  // speed-limit trigger boxes set the vehicle's limit; 30 km/h until the first).
+  double SignSpeedLimit(const map::Waypoint& wp) const;
   const std::vector<map::Transform>& SpawnPoints() const { return spawn_points_; }
   const std::vector<map::Transform>& WalkerSpawnPoints() const { return walker_spawn_points_; }
   uint64_t Hash() const { return hash_; }
@@ -44,6 +52,8 @@ class Town {
   std::vector<TownLight> lights_;
   int group_count_ = 0;
   std::map<std::tuple<int, int, int>, int> lane_light_;
+  std::vector<map::TrafficLightInfo> signs_;
+  std::map<std::tuple<int, int, int>, int> lane_sign_;
   std::vector<map::Transform> spawn_points_;
   std::vector<map::Transform> walker_spawn_points_;
   uint64_t hash_ = 0;

@@ -45,6 +45,7 @@ struct Infractions {
   int walker_collisions = 0;
   int static_collisions = 0;
   int lane_invasions = 0;
+  int stop_signs = 0;             // crossed a stop sign's line without a full stop first
 };
 
 struct VehicleView {

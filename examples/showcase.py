@@ -27,6 +27,7 @@ import airsim
 import carla
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+BUILD = os.environ.get('LOCKSTEP_BUILD_DIR') or os.path.join(ROOT, 'build')
 
 
 def progress(done, total, started, extra=''):
@@ -41,7 +42,7 @@ def progress(done, total, started, extra=''):
 def write_config(out, seed):
     """A launch config with every service built on this machine (air_sim always; ground_sim,
     sensors, render when their programs exist), synchronous, in the training town."""
-    bin_dir = os.path.join(ROOT, 'build', 'bin')
+    bin_dir = os.path.join(BUILD, 'bin')
     services = ['  - {name: air_sim, kind: air_sim}']
     for kind, perception in (('ground_sim', False), ('sensors', True), ('render', True)):
         if os.path.exists(os.path.join(bin_dir, 'lockstep_' + kind)):
@@ -50,7 +51,7 @@ def write_config(out, seed):
     text = '\n'.join([
         '# Written by examples/showcase.py: every service built on this machine.',
         'name: showcase', 'domain_id: 0', 'seed: %d' % seed,
-        'map: %s' % os.path.join(ROOT, 'build', 'maps', 'generated', 'LockstepTown1.xodr'),
+        'map: %s' % os.path.join(BUILD, 'maps', 'generated', 'LockstepTown1.xodr'),
         'output_dir: %s' % os.path.abspath(out),
         'world:', '  synchronous_mode: true', '  fixed_delta_seconds: 0.05', '  service_timeout: 60',
         'services:'] + services) + '\n'
@@ -109,7 +110,7 @@ def main():
     if not args.connect:
         os.environ.setdefault('LOCKSTEP_DOMAIN', str(int(os.environ.get('LOCKSTEP_DOMAIN', '0'))))
         print('starting the simulation: %s (DDS domain %s)' % (os.path.relpath(args.config), os.environ['LOCKSTEP_DOMAIN']))
-        sim = subprocess.Popen([os.path.join(ROOT, 'build', 'bin', 'lockstep'), 'up', args.config,
+        sim = subprocess.Popen([os.path.join(BUILD, 'bin', 'lockstep'), 'up', args.config,
                                 '--domain', os.environ['LOCKSTEP_DOMAIN']],
                                stdout=open(os.path.join(args.out, 'services.log'), 'w'), stderr=subprocess.STDOUT)
     actors = []

@@ -129,7 +129,7 @@ int main(int argc, char** argv) {
   std::thread camera_thread([&] { camera.Run(stop); });
 
   double cpp_us = 0, barrier_us = 0;
-  {
+  try {
     lockstep::client::ClientOptions o;
     o.domain = domain;
     o.timeout_s = 30;
@@ -149,6 +149,14 @@ int main(int argc, char** argv) {
     std::printf("{\"bench\":\"client_tick_cpp\",\"ticks\":%d,\"median_us\":%.1f,\"barrier_median_us\":%.1f}\n", ticks, cpp_us,
                 barrier_us);
     std::fflush(stdout);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_client: the C++ part failed: %s\n", e.what());
+    stop = true;
+    coordinator_thread.join();
+    camera_thread.join();
+    kill(noop, SIGTERM);
+    waitpid(noop, nullptr, 0);
+    return 1;
   }
 
   // Python: ticks, waypoints, 720p images (client_bench.py prints one JSON line).

@@ -17,6 +17,7 @@
 #include "lockstep/map/map.h"
 #include "lockstep/runtime/frame_buffer.h"
 #include "lockstep/runtime/hash.h"
+#include "lockstep/client/sample_pool.h"
 
 namespace lockstep::client {
 
@@ -138,6 +139,9 @@ struct Client::Impl {
   std::mutex reader_mu;             // creation of the sensor readers
   std::map<SensorType, std::shared_ptr<void>> sensor_readers;
   std::map<uint32_t, std::shared_ptr<void>> image_readers;  // cameras: one topic each
+  // Images and point clouds change hands without a copy (sample_pool.h).
+  std::shared_ptr<SamplePool<msg::Image>> image_pool = std::make_shared<SamplePool<msg::Image>>(4);
+  std::shared_ptr<SamplePool<msg::PointCloud>> cloud_pool = std::make_shared<SamplePool<msg::PointCloud>>(4);
 
   Writer<msg::Command> commands;
   // Readers last: their callbacks use everything above.
@@ -225,6 +229,7 @@ struct Client::Impl {
     {
       std::lock_guard<std::mutex> lock(reader_mu);
       sensor_readers.clear();
+      image_readers.clear();
     }
     {
       std::lock_guard<std::mutex> lock(mu);
@@ -497,6 +502,17 @@ struct Client::Impl {
     cv.notify_all();
   }
 
+  // Large payloads: the received sample is taken, not copied.
+  template <class T>
+  std::shared_ptr<void> MakeTakingReader(SensorType type, const Topic<T>& topic, std::shared_ptr<SamplePool<T>> pool) {
+    return std::make_shared<TakingReader<T>>(*bus, topic, [this, type, pool](T& m, const SampleInfo&) {
+      std::shared_ptr<const T> taken = pool->Take(m);
+      const uint32_t sensor = taken->sensor();
+      const msg::FrameStamp stamp = taken->stamp();
+      OnSensor(type, sensor, stamp, std::move(taken));
+    });
+  }
+
   template <class T>
   void MakeSensorReader(SensorType type, const Topic<T>& topic) {
     auto reader = std::make_shared<Reader<T>>(*bus, topic, [this, type](const T& m, const SampleInfo&) {
@@ -510,16 +526,13 @@ struct Client::Impl {
     if (type == SensorType::kImage) {
       if (image_readers.count(sensor)) return;
       const std::string name = topics::ImageTopicName(sensor);
-      image_readers[sensor] = std::make_shared<Reader<msg::Image>>(
-          *bus, Topic<msg::Image>{name.c_str(), QosKind::kImage}, [this](const msg::Image& m, const SampleInfo&) {
-            OnSensor(SensorType::kImage, m.sensor(), m.stamp(), std::make_shared<const msg::Image>(m));
-          });
+      image_readers[sensor] = MakeTakingReader(SensorType::kImage, Topic<msg::Image>{name.c_str(), QosKind::kImage}, image_pool);
       return;
     }
     if (sensor_readers.count(type)) return;
     switch (type) {
       case SensorType::kImage: break;
-      case SensorType::kPointCloud: MakeSensorReader(type, topics::kPointCloud); break;
+      case SensorType::kPointCloud: sensor_readers[type] = MakeTakingReader(type, topics::kPointCloud, cloud_pool); break;
       case SensorType::kRadar: MakeSensorReader(type, topics::kRadar); break;
       case SensorType::kImu: MakeSensorReader(type, topics::kImu); break;
       case SensorType::kGnss: MakeSensorReader(type, topics::kGnss); break;

@@ -195,9 +195,14 @@ CommandFuture MultirotorClient::moveToPositionAsync(double x, double y, double z
 
 CommandFuture MultirotorClient::moveToZAsync(double z, double velocity, double timeout_s, NedYawMode yaw, double lookahead,
                                              const std::string& vehicle) {
-  const auto pose = simGetVehiclePose(vehicle);
-  return moveToPositionAsync(pose.first.x, pose.first.y, z, velocity, timeout_s, NedDrivetrain::kMaxDegreeOfFreedom, yaw,
-                             lookahead, vehicle);
+  const uint32_t id = Resolve(vehicle);
+  auto c = Make(id, msg::DroneCommandKind::DRONE_MOVE_TO_Z);
+  c.target(V(0, 0, homeEnu(vehicle).z() - z));  // only z counts: air_sim holds the horizontal position
+  c.velocity(velocity);
+  c.timeout(Timeout(timeout_s));
+  c.yaw(ToYaw(yaw));
+  c.lookahead(lookahead);
+  return Send(id, c);
 }
 
 CommandFuture MultirotorClient::moveOnPathAsync(const std::vector<Ned>& path, double velocity, double timeout_s,
@@ -308,6 +313,85 @@ CommandFuture MultirotorClient::moveByMotorPWMsAsync(const std::vector<double>& 
   c.values(pwms);
   c.duration(duration);
   return Send(id, c);
+}
+
+CommandFuture MultirotorClient::moveByRollPitchYawrateThrottleAsync(double roll, double pitch, double yaw_rate, double throttle,
+                                                                    double duration, const std::string& vehicle) {
+  const uint32_t id = Resolve(vehicle);
+  auto c = Make(id, msg::DroneCommandKind::DRONE_MOVE_BY_ROLL_PITCH_YAWRATE_THROTTLE);
+  c.values({roll, -pitch, -yaw_rate, throttle});  // FRD -> FLU
+  c.duration(duration);
+  return Send(id, c);
+}
+
+CommandFuture MultirotorClient::moveByRollPitchYawrateZAsync(double roll, double pitch, double yaw_rate, double z,
+                                                             double duration, const std::string& vehicle) {
+  const uint32_t id = Resolve(vehicle);
+  auto c = Make(id, msg::DroneCommandKind::DRONE_MOVE_BY_ROLL_PITCH_YAWRATE_Z);
+  c.values({roll, -pitch, -yaw_rate, homeEnu(vehicle).z() - z});
+  c.duration(duration);
+  return Send(id, c);
+}
+
+CommandFuture MultirotorClient::moveByAngleRatesZAsync(double roll_rate, double pitch_rate, double yaw_rate, double z,
+                                                       double duration, const std::string& vehicle) {
+  const uint32_t id = Resolve(vehicle);
+  auto c = Make(id, msg::DroneCommandKind::DRONE_MOVE_BY_ANGLE_RATES_Z);
+  c.values({roll_rate, -pitch_rate, -yaw_rate, homeEnu(vehicle).z() - z});
+  c.duration(duration);
+  return Send(id, c);
+}
+
+CommandFuture MultirotorClient::moveToGPSAsync(double latitude, double longitude, double altitude, double velocity,
+                                               double timeout_s, NedDrivetrain drivetrain, NedYawMode yaw, double lookahead,
+                                               double adaptive_lookahead, const std::string& vehicle) {
+  const uint32_t id = Resolve(vehicle);
+  auto c = Make(id, msg::DroneCommandKind::DRONE_MOVE_TO_GPS);
+  c.values({latitude, longitude, altitude});
+  c.velocity(velocity);
+  c.timeout(Timeout(timeout_s));
+  c.drivetrain(ToDrive(drivetrain));
+  c.yaw(ToYaw(yaw));
+  c.lookahead(lookahead);
+  c.adaptive_lookahead(adaptive_lookahead > 0 ? adaptive_lookahead : -1);  // AirSim's 0 = off; the wire's 0 = default
+  return Send(id, c);
+}
+
+void MultirotorClient::setControllerGains(msg::GainsLoop loop, const Pid& a, const Pid& b, const Pid& c,
+                                          const std::string& vehicle) {
+  const uint32_t id = Resolve(vehicle);
+  const bool linear = loop == msg::GainsLoop::GAINS_VELOCITY || loop == msg::GainsLoop::GAINS_POSITION;
+  if (linear && (a.kp != b.kp || a.ki != b.ki || a.kd != b.kd)) {
+    throw ClientError("set*ControllerGains: air_sim has one horizontal gain for x and y; give both the same PID");
+  }
+  auto cmd = Make(id, msg::DroneCommandKind::DRONE_SET_GAINS);
+  cmd.gains_loop(loop);
+  // Angle loops: roll, pitch, yaw are the same axes in FRD and FLU (gains, not signs);
+  // linear loops: x, y (north, east) -> one horizontal gain, z -> z.
+  msg::PidGains g;
+  g.kp(V(a.kp, b.kp, c.kp));
+  g.ki(V(a.ki, b.ki, c.ki));
+  g.kd(V(a.kd, b.kd, c.kd));
+  cmd.gains(g);
+  Send(id, cmd);  // takes effect with the next tick, like every command
+}
+
+void MultirotorClient::simSetWind(const Ned& wind) {
+  const uint32_t id = Resolve("");  // any drone carries it: the wind is every drone's
+  auto c = Make(id, msg::DroneCommandKind::DRONE_SET_WIND);
+  c.target(V(wind.y, wind.x, -wind.z));
+  Send(id, c);
+}
+
+void MultirotorClient::simSetKinematics(const NedKinematics& state, const std::string& vehicle) {
+  const uint32_t id = Resolve(vehicle);
+  auto c = Make(id, msg::DroneCommandKind::DRONE_SET_KINEMATICS);
+  c.target(NedToEnu(state.position, homeEnu(vehicle)));
+  const msg::Quaternion q = NedToEnuQuaternion(state.orientation);
+  const Ned& v = state.linear_velocity;
+  const Ned& w = state.angular_velocity;
+  c.values({q.w(), q.x(), q.y(), q.z(), v.y, v.x, -v.z, w.x, -w.y, -w.z});
+  Send(id, c);
 }
 
 CommandFuture MultirotorClient::trackTargetAsync(const Ned& position, const Ned& velocity, double max_speed, double duration,

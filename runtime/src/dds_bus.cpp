@@ -64,7 +64,7 @@ class DdsWriter final : public RawWriter {
 
 class DdsReader final : public RawReader, public dds::DataReaderListener {
  public:
-  DdsReader(const TypeOps& ops, RawCallback on_sample, LivelinessCallback on_liveliness)
+  DdsReader(const TypeOps& ops, RawTakeCallback on_sample, LivelinessCallback on_liveliness)
       : ops_(ops), on_sample_(std::move(on_sample)), on_liveliness_(std::move(on_liveliness)),
         sample_(ops.new_sample()) {}
   ~DdsReader() override {
@@ -107,7 +107,7 @@ class DdsReader final : public RawReader, public dds::DataReaderListener {
 
  private:
   const TypeOps& ops_;
-  RawCallback on_sample_;
+  RawTakeCallback on_sample_;  // sample_ is ours alone: the callback may take it
   LivelinessCallback on_liveliness_;
   void* sample_;
   std::mutex mu_;
@@ -173,6 +173,21 @@ class DdsBus final : public Bus {
 
   std::unique_ptr<RawReader> CreateRawReader(const std::string& topic, const TypeOps& ops, QosKind qos,
                                              RawCallback on_sample, LivelinessCallback on_liveliness) override {
+    return MakeReader(topic, ops, qos, [cb = std::move(on_sample)](void* s, const SampleInfo& info) { cb(s, info); },
+                      std::move(on_liveliness));
+  }
+  std::unique_ptr<RawReader> CreateRawTakingReader(const std::string& topic, const TypeOps& ops, QosKind qos,
+                                                   RawTakeCallback on_sample) override {
+    return MakeReader(topic, ops, qos, std::move(on_sample), {});
+  }
+
+  std::string Describe() const override {
+    return "Fast DDS domain " + std::to_string(options_.domain_id) + " (" + options_.participant_profile + ", " + file_ + ")";
+  }
+
+ private:
+  std::unique_ptr<RawReader> MakeReader(const std::string& topic, const TypeOps& ops, QosKind qos, RawTakeCallback on_sample,
+                                        LivelinessCallback on_liveliness) {
     dds::Topic* t = GetTopic(topic, ops);
     dds::DataReaderQos rqos;
     LoadReaderQos(qos, &rqos);
@@ -184,11 +199,6 @@ class DdsBus final : public Bus {
     return reader;
   }
 
-  std::string Describe() const override {
-    return "Fast DDS domain " + std::to_string(options_.domain_id) + " (" + options_.participant_profile + ", " + file_ + ")";
-  }
-
- private:
   dds::Topic* GetTopic(const std::string& name, const TypeOps& ops) {
     std::lock_guard<std::mutex> lock(mu_);
     if (auto it = topics_.find(name); it != topics_.end()) return it->second;

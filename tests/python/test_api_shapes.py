@@ -37,7 +37,8 @@ def test_carla_commands(name):
     'MultirotorClient', 'Vector3r', 'Quaternionr', 'Pose', 'YawMode', 'DrivetrainType', 'ImageRequest', 'ImageType',
     'ImageResponse', 'MultirotorState', 'KinematicsState', 'CollisionInfo', 'LandedState', 'ImuData', 'GpsData',
     'BarometerData', 'MagnetometerData', 'DistanceSensorData', 'LidarData', 'WeatherParameter', 'to_quaternion',
-    'to_eularian_angles', 'write_file', 'string_to_uint8_array'])
+    'to_eularian_angles', 'write_file', 'string_to_uint8_array', 'PIDGains', 'AngleRateControllerGains',
+    'AngleLevelControllerGains', 'VelocityControllerGains', 'PositionControllerGains'])
 def test_airsim_names(name):
     assert hasattr(airsim, name)
 
@@ -50,7 +51,9 @@ def test_airsim_names(name):
     'getMultirotorState', 'getImuData', 'getGpsData', 'getBarometerData', 'getMagnetometerData',
     'getDistanceSensorData', 'getLidarData', 'simSetWeatherParameter', 'simPause', 'simContinueForTime',
     'simContinueForFrames', 'simGetVehiclePose', 'simSetVehiclePose', 'simGetCollisionInfo', 'listVehicles',
-    'simAddVehicle', 'reset'])
+    'simAddVehicle', 'reset', 'moveByRollPitchYawrateThrottleAsync', 'moveByRollPitchYawrateZAsync',
+    'moveByAngleRatesZAsync', 'moveToGPSAsync', 'simSetWind', 'simSetKinematics', 'setAngleRateControllerGains',
+    'setAngleLevelControllerGains', 'setVelocityControllerGains', 'setPositionControllerGains'])
 def test_multirotor_client_methods(method):
     assert callable(getattr(airsim.MultirotorClient, method))
 

@@ -3,12 +3,8 @@ started the way a user starts them: `lockstep python examples/<name>.py`."""
 import os
 import subprocess
 
-import pytest
+from conftest import BIN, SOURCE
 
-from conftest import BIN, SOURCE, has_service
-
-GROUND = has_service('ground_sim')
-SENSORS = has_service('sensors') and has_service('render')
 
 
 def run(sim, script, *args, timeout=240):
@@ -24,13 +20,11 @@ def test_drone_hello(sim):
     assert 'done: landed state 0' in out
 
 
-@pytest.mark.skipif(not GROUND, reason='needs ground_sim (vehicles), not built on this branch')
 def test_tutorial(sim):
     out = run(sim, 'tutorial.py', '--ticks', '60', '--out', os.path.join(sim.dir, 'tutorial'))
     assert 'destroying actors' in out
 
 
-@pytest.mark.skipif(not GROUND, reason='needs ground_sim (vehicles, walkers, Traffic Manager), not built on this branch')
 def test_spawn_traffic(sim):
     out = run(sim, 'spawn_traffic.py', '-n', '10', '-w', '5', '--ticks', '100')
     assert 'destroyed' in out
@@ -45,13 +39,11 @@ def test_sync_sensors(sim):
     assert 'every sensor delivered every frame once' in out
 
 
-@pytest.mark.skipif(not GROUND, reason='needs ground_sim (a car to follow), not built on this branch')
 def test_drone_follow_car(sim):
     out = run(sim, 'drone_follow_car.py', '--ticks', '200')
     assert 'drone-to-target distance' in out
 
 
-@pytest.mark.skipif(not GROUND, reason='needs ground_sim (cars), not built on this branch')
 def test_cars_and_drones(sim):
     out = run(sim, 'cars_and_drones.py', '--ticks', '100')
     assert '100/100 ticks with ground and air state of the same frame' in out

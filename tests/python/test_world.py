@@ -173,6 +173,70 @@ def test_airsim_drone_flies_in_ned_from_its_spawn(world):
         drone.destroy()
 
 
+def test_airsim_second_pass_calls(world):
+    """moveToZ, moveByRollPitchYawrateZ, moveToGPS, simSetWind, simSetKinematics and the controller gains reach
+    air_sim and move the drone the way AirSim's would."""
+    bp = world.get_blueprint_library().find('drone.generic_quad')
+    bp.set_attribute('role_name', 'second')
+    drone = world.spawn_actor(bp, carla.Transform(carla.Location(43.25, 1.75, 0.2)))
+    for _ in range(20):
+        world.tick()
+    c = airsim.MultirotorClient()
+    try:
+        c.enableApiControl(True, 'second')
+        c.armDisarm(True, 'second')
+        assert c.takeoffAsync(vehicle_name='second').join()
+
+        def pos():
+            p = c.getMultirotorState(vehicle_name='second').kinematics_estimated.position
+            return p.x_val, p.y_val, p.z_val
+        x0, y0, _ = pos()
+        assert c.moveToZAsync(-7, 2, vehicle_name='second').join()
+        x, y, z = pos()
+        assert (x, y, z) == (pytest.approx(x0, abs=0.5), pytest.approx(y0, abs=0.5), pytest.approx(-7, abs=0.5))
+
+        # A yaw rate of +0.5 rad/s (clockwise seen from above, NED) for 1 s, level, at 7 m.
+        yaw0 = airsim.to_eularian_angles(c.simGetVehiclePose('second').orientation)[2]
+        c.moveByRollPitchYawrateZAsync(0, 0, 0.5, -7, 1, vehicle_name='second').join()
+        yaw1 = airsim.to_eularian_angles(c.simGetVehiclePose('second').orientation)[2]
+        assert 0.2 < (yaw1 - yaw0 + math.pi) % (2 * math.pi) - math.pi < 0.8
+
+        # 10 m east through the map's geo-reference.
+        gps = c.getGpsData(vehicle_name='second').gnss.geo_point
+        x0, y0, _ = pos()
+        lon = gps.longitude + math.degrees(10 / (6378137.0 * math.cos(math.radians(gps.latitude))))
+        assert c.moveToGPSAsync(gps.latitude, lon, gps.altitude, 3, vehicle_name='second').join()
+        x, y, _ = pos()
+        assert (x, y) == (pytest.approx(x0, abs=1.0), pytest.approx(y0 + 10, abs=1.0))
+
+        # Wind from the south (blowing north) pushes a level drone that holds no position.
+        c.simSetWind(airsim.Vector3r(6, 0, 0))
+        x0, _, _ = pos()
+        c.moveByRollPitchYawrateZAsync(0, 0, 0, -7, 2, vehicle_name='second').join()
+        assert c.getMultirotorState(vehicle_name='second').kinematics_estimated.linear_velocity.x_val > 0.3
+        c.simSetWind(airsim.Vector3r(0, 0, 0))
+
+        # simSetKinematics: a pose and a velocity at once.
+        k = airsim.KinematicsState()
+        k.position = airsim.Vector3r(0, 0, -9)
+        k.orientation = airsim.to_quaternion(0, 0, 0)
+        k.linear_velocity = airsim.Vector3r(0, 2, 0)
+        c.simSetKinematics(k, True, 'second')
+        world.tick()
+        s = c.getMultirotorState(vehicle_name='second').kinematics_estimated
+        assert (s.position.x_val, s.position.z_val) == (pytest.approx(0, abs=0.3), pytest.approx(-9, abs=0.3))
+        assert s.linear_velocity.y_val == pytest.approx(2, abs=0.5)
+
+        c.setVelocityControllerGains(vehicle_name='second')  # AirSim's defaults
+        with pytest.raises(airsim.LockstepUnsupported, match='setAngleLevelControllerGains with kd'):
+            c.setAngleLevelControllerGains(airsim.AngleLevelControllerGains(roll_gains=airsim.PIDGains(2.5, 0, 1)),
+                                           vehicle_name='second')
+        assert c.hoverAsync(vehicle_name='second').join()
+    finally:
+        c.simSetWind(airsim.Vector3r(0, 0, 0))
+        drone.destroy()
+
+
 def _per_frame_sensors(world):
     lib = world.get_blueprint_library()
     wanted = ['sensor.camera.rgb', 'sensor.camera.depth', 'sensor.lidar.ray_cast', 'sensor.other.imu',

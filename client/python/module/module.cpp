@@ -6,6 +6,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <map>
 #include <memory>
 
 #include "commands.h"
@@ -720,6 +721,46 @@ PYBIND11_MODULE(_lockstep, m) {
       .def("move_by_rpy_z", &MC::moveByRollPitchYawZAsync, py::call_guard<py::gil_scoped_release>())
       .def("move_by_angle_rates_throttle", &MC::moveByAngleRatesThrottleAsync, py::call_guard<py::gil_scoped_release>())
       .def("move_by_motor_pwms", &MC::moveByMotorPWMsAsync, py::call_guard<py::gil_scoped_release>())
+      .def("move_by_rp_yawrate_throttle", &MC::moveByRollPitchYawrateThrottleAsync, py::call_guard<py::gil_scoped_release>())
+      .def("move_by_rp_yawrate_z", &MC::moveByRollPitchYawrateZAsync, py::call_guard<py::gil_scoped_release>())
+      .def("move_by_angle_rates_z", &MC::moveByAngleRatesZAsync, py::call_guard<py::gil_scoped_release>())
+      .def("move_to_gps",
+           [=](MC& mc, double lat, double lon, double alt, double v, double t, int d, bool is_rate, double yaw, double la,
+               double adaptive, const std::string& name) {
+             py::gil_scoped_release release;
+             return mc.moveToGPSAsync(lat, lon, alt, v, t, drive(d), yawmode(is_rate, yaw), la, adaptive, name);
+           })
+      .def("set_gains",
+           [](MC& mc, const std::string& loop, const std::vector<std::tuple<double, double, double>>& pids,
+              const std::string& name) {
+             static const std::map<std::string, msg::GainsLoop> loops = {{"angle_rate", msg::GainsLoop::GAINS_ANGLE_RATE},
+                                                                         {"angle_level", msg::GainsLoop::GAINS_ANGLE_LEVEL},
+                                                                         {"velocity", msg::GainsLoop::GAINS_VELOCITY},
+                                                                         {"position", msg::GainsLoop::GAINS_POSITION}};
+             auto it = loops.find(loop);
+             if (it == loops.end()) throw py::value_error("set_gains: unknown loop '" + loop + "'");
+             if (pids.size() != 3) throw py::value_error("set_gains: three PIDs (one per axis), got " + std::to_string(pids.size()));
+             std::vector<MC::Pid> p;
+             for (const auto& [kp, ki, kd] : pids) p.push_back({kp, ki, kd});
+             py::gil_scoped_release release;
+             mc.setControllerGains(it->second, p[0], p[1], p[2], name);
+           })
+      .def("set_wind",
+           [](MC& mc, std::tuple<double, double, double> w) {
+             py::gil_scoped_release release;
+             mc.simSetWind({std::get<0>(w), std::get<1>(w), std::get<2>(w)});
+           })
+      .def("set_kinematics",
+           [](MC& mc, std::tuple<double, double, double> p, std::tuple<double, double, double, double> q,
+              std::tuple<double, double, double> v, std::tuple<double, double, double> w, const std::string& name) {
+             NedKinematics k;
+             k.position = {std::get<0>(p), std::get<1>(p), std::get<2>(p)};
+             k.orientation = {std::get<0>(q), std::get<1>(q), std::get<2>(q), std::get<3>(q)};
+             k.linear_velocity = {std::get<0>(v), std::get<1>(v), std::get<2>(v)};
+             k.angular_velocity = {std::get<0>(w), std::get<1>(w), std::get<2>(w)};
+             py::gil_scoped_release release;
+             mc.simSetKinematics(k, name);
+           })
       .def("track_target",
            [](MC& mc, std::tuple<double, double, double> p, std::tuple<double, double, double> v, double max_speed,
               double dur, const std::string& name) {

@@ -129,6 +129,27 @@ class MultirotorClient {
   CommandFuture moveByAngleRatesThrottleAsync(double roll_rate, double pitch_rate, double yaw_rate, double throttle,
                                               double duration, const std::string& vehicle = "");
   CommandFuture moveByMotorPWMsAsync(const std::vector<double>& pwms, double duration, const std::string& vehicle = "");
+  CommandFuture moveByRollPitchYawrateThrottleAsync(double roll, double pitch, double yaw_rate, double throttle,
+                                                    double duration, const std::string& vehicle = "");
+  CommandFuture moveByRollPitchYawrateZAsync(double roll, double pitch, double yaw_rate, double z, double duration,
+                                             const std::string& vehicle = "");
+  CommandFuture moveByAngleRatesZAsync(double roll_rate, double pitch_rate, double yaw_rate, double z, double duration,
+                                       const std::string& vehicle = "");
+  // Geodetic goal (deg, deg, m) through the map's geo-reference (OpenDRIVE's, as CARLA's GNSS).
+  CommandFuture moveToGPSAsync(double latitude, double longitude, double altitude, double velocity, double timeout_s = 3e38,
+                               NedDrivetrain drivetrain = NedDrivetrain::kMaxDegreeOfFreedom, NedYawMode yaw = {},
+                               double lookahead = -1, double adaptive_lookahead = 1, const std::string& vehicle = "");
+  // AirSim's controller gains: one PID per axis, roll/pitch/yaw (angle loops) or x/y/z
+  // (velocity and position loops, NED; air_sim has one horizontal gain: x and y must agree).
+  struct Pid {
+    double kp = 0, ki = 0, kd = 0;
+  };
+  void setControllerGains(msg::GainsLoop loop, const Pid& a, const Pid& b, const Pid& c, const std::string& vehicle = "");
+  // simSetWind: one wind (m/s, world NED) for every drone, added to the weather's.
+  void simSetWind(const Ned& wind);
+  // simSetKinematics: pose (NED from home), linear velocity (m/s, world NED) and angular
+  // velocity (rad/s, body FRD), at once.
+  void simSetKinematics(const NedKinematics& state, const std::string& vehicle = "");
   // Lockstep extension: follow a moving target given in NED (position m, velocity m/s).
   CommandFuture trackTargetAsync(const Ned& position, const Ned& velocity, double max_speed, double duration,
                                  const std::string& vehicle = "");

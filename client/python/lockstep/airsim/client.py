@@ -12,9 +12,11 @@ import numpy as np
 
 import lockstep
 
-from .types import (BarometerData, CollisionInfo, DistanceSensorData, DrivetrainType, GeoPoint, GpsData, ImageResponse,
-                    ImageType, ImuData, KinematicsState, LandedState, LidarData, MagnetometerData, MultirotorState, Pose,
-                    Quaternionr, RotorStates, Vector3r, WeatherParameter, YawMode)
+from .types import (AngleLevelControllerGains, AngleRateControllerGains, BarometerData, CollisionInfo,
+                    DistanceSensorData, DrivetrainType, GeoPoint, GpsData, ImageResponse, ImageType, ImuData,
+                    KinematicsState, LandedState, LidarData, MagnetometerData, MultirotorState, Pose,
+                    PositionControllerGains, Quaternionr, RotorStates, Vector3r, VelocityControllerGains,
+                    WeatherParameter, YawMode)
 
 __all__ = ['MultirotorClient', 'VehicleClient', 'LockstepUnsupported']
 
@@ -331,26 +333,60 @@ class MultirotorClient:
     def moveByRC(self, *args, **kwargs):
         _unsupported('moveByRC', 'there is no RC input on the wire')
 
-    def moveByRollPitchYawrateThrottleAsync(self, *args, **kwargs):
-        _unsupported('moveByRollPitchYawrateThrottleAsync', 'not on the wire yet (air_sim second pass)')
+    def moveByRollPitchYawrateThrottleAsync(self, roll, pitch, yaw_rate, throttle, duration, vehicle_name=''):
+        return _Future(self._mc.move_by_rp_yawrate_throttle(roll, pitch, yaw_rate, throttle, duration, vehicle_name))
 
-    def moveByRollPitchYawrateZAsync(self, *args, **kwargs):
-        _unsupported('moveByRollPitchYawrateZAsync', 'not on the wire yet (air_sim second pass)')
+    def moveByRollPitchYawrateZAsync(self, roll, pitch, yaw_rate, z, duration, vehicle_name=''):
+        return _Future(self._mc.move_by_rp_yawrate_z(roll, pitch, yaw_rate, z, duration, vehicle_name))
 
-    def moveByAngleRatesZAsync(self, *args, **kwargs):
-        _unsupported('moveByAngleRatesZAsync', 'not on the wire yet (air_sim second pass)')
+    def moveByAngleRatesZAsync(self, roll_rate, pitch_rate, yaw_rate, z, duration, vehicle_name=''):
+        return _Future(self._mc.move_by_angle_rates_z(roll_rate, pitch_rate, yaw_rate, z, duration, vehicle_name))
 
-    def setAngleRateControllerGains(self, *args, **kwargs):
-        _unsupported('setAngleRateControllerGains', 'DRONE_SET_GAINS is not mapped by the client yet')
+    def moveToGPSAsync(self, latitude, longitude, altitude, velocity, timeout_sec=3e+38,
+                       drivetrain=DrivetrainType.MaxDegreeOfFreedom, yaw_mode=YawMode(), lookahead=-1, adaptive_lookahead=1,
+                       vehicle_name=''):
+        return _Future(self._mc.move_to_gps(latitude, longitude, altitude, velocity, timeout_sec, drivetrain,
+                                            yaw_mode.is_rate, yaw_mode.yaw_or_rate, lookahead, adaptive_lookahead,
+                                            vehicle_name))
 
-    def setAngleLevelControllerGains(self, *args, **kwargs):
-        _unsupported('setAngleLevelControllerGains', 'DRONE_SET_GAINS is not mapped by the client yet')
+    # The terms air_sim's loops have (docs/compatibility.md): the others must be 0.
+    _GAIN_TERMS = {'angle_rate': 'pid', 'angle_level': 'p', 'velocity': 'pi', 'position': 'p'}
 
-    def setVelocityControllerGains(self, *args, **kwargs):
-        _unsupported('setVelocityControllerGains', 'DRONE_SET_GAINS is not mapped by the client yet')
+    def _set_gains(self, call, loop, gains, vehicle_name):
+        kp, ki, kd = gains.to_lists()
+        terms = self._GAIN_TERMS[loop]
+        for name, values in (('i', ki), ('d', kd)):
+            if name not in terms and any(values):
+                _unsupported('%s with k%s' % (call, name), "air_sim's %s loop has no %s term" % (
+                    loop.replace('_', ' '), {'i': 'integral', 'd': 'derivative'}[name]))
+        self._mc.set_gains(loop, list(zip(kp, ki, kd)), vehicle_name)
 
-    def setPositionControllerGains(self, *args, **kwargs):
-        _unsupported('setPositionControllerGains', 'DRONE_SET_GAINS is not mapped by the client yet')
+    def setAngleRateControllerGains(self, angle_rate_gains=AngleRateControllerGains(), vehicle_name=''):
+        self._set_gains('setAngleRateControllerGains', 'angle_rate', angle_rate_gains, vehicle_name)
+
+    def setAngleLevelControllerGains(self, angle_level_gains=AngleLevelControllerGains(), vehicle_name=''):
+        self._set_gains('setAngleLevelControllerGains', 'angle_level', angle_level_gains, vehicle_name)
+
+    def setVelocityControllerGains(self, velocity_gains=VelocityControllerGains(), vehicle_name=''):
+        self._set_gains('setVelocityControllerGains', 'velocity', velocity_gains, vehicle_name)
+
+    def setPositionControllerGains(self, position_gains=PositionControllerGains(), vehicle_name=''):
+        self._set_gains('setPositionControllerGains', 'position', position_gains, vehicle_name)
+
+    def simSetWind(self, wind):
+        """One wind (m/s, world NED) for every drone, added to the weather's wind."""
+        self._mc.set_wind((wind.x_val, wind.y_val, wind.z_val))
+
+    def simSetKinematics(self, state, ignore_collision, vehicle_name=''):
+        """Pose, linear velocity (world NED) and angular velocity (body FRD) at once; accelerations are ignored
+        (air_sim derives them from the next step)."""
+        self._drone(vehicle_name)
+        o = state.orientation
+
+        def t(v):
+            return (v.x_val, v.y_val, v.z_val)
+        self._mc.set_kinematics(t(state.position), (o.w_val, o.x_val, o.y_val, o.z_val), t(state.linear_velocity),
+                                t(state.angular_velocity), vehicle_name)
 
     # --- state ---
     def getMultirotorState(self, vehicle_name=''):
@@ -575,8 +611,6 @@ class MultirotorClient:
     def simSetCameraPose(self, *args, **kwargs):
         _unsupported('simSetCameraPose', 'cameras are fixed mounts; spawn others with the CARLA API')
 
-    def simSetWind(self, *args, **kwargs):
-        _unsupported('simSetWind', 'wind is not on the wire')
 
 
 VehicleClient = MultirotorClient

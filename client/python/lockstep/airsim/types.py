@@ -4,7 +4,9 @@ import math
 __all__ = ['Vector3r', 'Vector2r', 'Quaternionr', 'Pose', 'YawMode', 'DrivetrainType', 'LandedState', 'ImageType',
            'ImageRequest', 'ImageResponse', 'KinematicsState', 'CollisionInfo', 'GeoPoint', 'MultirotorState',
            'RCData', 'ImuData', 'GnssReport', 'GpsData', 'BarometerData', 'MagnetometerData', 'DistanceSensorData',
-           'LidarData', 'WeatherParameter', 'to_quaternion', 'to_eularian_angles', 'EnvironmentState', 'RotorStates']
+           'LidarData', 'WeatherParameter', 'to_quaternion', 'to_eularian_angles', 'EnvironmentState', 'RotorStates',
+           'PIDGains', 'AngleRateControllerGains', 'AngleLevelControllerGains', 'VelocityControllerGains',
+           'PositionControllerGains']
 
 
 class MsgpackMixin:
@@ -189,6 +191,44 @@ class KinematicsState(MsgpackMixin):
         self.angular_velocity = Vector3r()
         self.linear_acceleration = Vector3r()
         self.angular_acceleration = Vector3r()
+
+
+class PIDGains:
+    """One axis of a controller: proportional, integral and derivative gains."""
+
+    def __init__(self, kp, ki, kd):
+        self.kp, self.ki, self.kd = kp, ki, kd
+
+    def to_list(self):
+        return [self.kp, self.ki, self.kd]
+
+
+class AngleRateControllerGains:
+    def __init__(self, roll_gains=PIDGains(0.25, 0, 0), pitch_gains=PIDGains(0.25, 0, 0), yaw_gains=PIDGains(0.25, 0, 0)):
+        self.roll_gains, self.pitch_gains, self.yaw_gains = roll_gains, pitch_gains, yaw_gains
+
+    def to_lists(self):
+        g = (self.roll_gains, self.pitch_gains, self.yaw_gains)
+        return [x.kp for x in g], [x.ki for x in g], [x.kd for x in g]
+
+
+class AngleLevelControllerGains(AngleRateControllerGains):
+    def __init__(self, roll_gains=PIDGains(2.5, 0, 0), pitch_gains=PIDGains(2.5, 0, 0), yaw_gains=PIDGains(2.5, 0, 0)):
+        super().__init__(roll_gains, pitch_gains, yaw_gains)
+
+
+class VelocityControllerGains:
+    def __init__(self, x_gains=PIDGains(0.2, 0, 0), y_gains=PIDGains(0.2, 0, 0), z_gains=PIDGains(2.0, 2.0, 0)):
+        self.x_gains, self.y_gains, self.z_gains = x_gains, y_gains, z_gains
+
+    def to_lists(self):
+        g = (self.x_gains, self.y_gains, self.z_gains)
+        return [x.kp for x in g], [x.ki for x in g], [x.kd for x in g]
+
+
+class PositionControllerGains(VelocityControllerGains):
+    def __init__(self, x_gains=PIDGains(0.25, 0, 0), y_gains=PIDGains(0.25, 0, 0), z_gains=PIDGains(0.25, 0, 0)):
+        super().__init__(x_gains, y_gains, z_gains)
 
 
 class EnvironmentState(MsgpackMixin):

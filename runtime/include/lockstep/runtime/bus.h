@@ -66,6 +66,9 @@ class RawReader {
 
 using RawCallback = std::function<void(const void* sample, const SampleInfo& info)>;
 using LivelinessCallback = std::function<void(const LivelinessChange& change)>;
+// Like RawCallback, but the sample is the reader's own: the callback may take its
+// contents by swapping them with an object of its own (the next sample is read into it).
+using RawTakeCallback = std::function<void(void* sample, const SampleInfo& info)>;
 
 class Bus {
  public:
@@ -76,6 +79,19 @@ class Bus {
   virtual std::unique_ptr<RawReader> CreateRawReader(const std::string& topic, const TypeOps& ops,
                                                      QosKind qos, RawCallback on_sample,
                                                      LivelinessCallback on_liveliness) = 0;
+  // A reader whose callback may take each sample (large payloads reach their user
+  // without a copy). Buses that share a sample between readers hand each a copy.
+  virtual std::unique_ptr<RawReader> CreateRawTakingReader(const std::string& topic, const TypeOps& ops, QosKind qos,
+                                                           RawTakeCallback on_sample) {
+    std::shared_ptr<void> own(ops.new_sample(), ops.delete_sample);
+    return CreateRawReader(
+        topic, ops, qos,
+        [ops = &ops, own, cb = std::move(on_sample)](const void* s, const SampleInfo& info) {
+          ops->copy(own.get(), s);
+          cb(own.get(), info);
+        },
+        {});
+  }
   virtual std::string Describe() const = 0;
 };
 
@@ -117,6 +133,25 @@ class Reader {
               cb(*static_cast<const T*>(s), info);
             },
             std::move(on_liveliness))) {}
+  int MatchedWriters() const { return raw_->MatchedWriters(); }
+  explicit operator bool() const { return raw_ != nullptr; }
+
+ private:
+  std::unique_ptr<RawReader> raw_;
+};
+
+// A reader whose callback gets a sample it may take: std::swap it with a T of its own
+// (say, a recycled one) and the bus reads the next sample into that T.
+template <class T>
+class TakingReader {
+ public:
+  using Callback = std::function<void(T&, const SampleInfo&)>;
+  TakingReader() = default;
+  TakingReader(Bus& bus, const Topic<T>& topic, Callback on_sample)
+      : raw_(bus.CreateRawTakingReader(topic.name, TypeOpsOf<T>(), topic.qos,
+                                       [cb = std::move(on_sample)](void* s, const SampleInfo& info) {
+                                         cb(*static_cast<T*>(s), info);
+                                       })) {}
   int MatchedWriters() const { return raw_->MatchedWriters(); }
   explicit operator bool() const { return raw_ != nullptr; }
 

@@ -120,6 +120,10 @@ struct ControllerActor {
   Vec3 goal = Vec3::Zero();
   std::deque<map::Waypoint> path;        // sidewalk points towards the goal
   Rng rng;
+  int crossing = -1;                     // crosswalk (Town::Crosswalks index) it is crossing
+  int cross_end = 0;                     // the end it walks to
+  bool cross_wait = false;               // at the kerb, waiting for its turn
+  int last_crosswalk = -1;               // crosswalk whose end it stands at (drawn once)
 };
 
 struct ExternalActor {
@@ -152,6 +156,7 @@ struct World::Impl {
   uint64_t frame = 0;
   PhysicsSettings settings;
   TmGlobal tm;
+  double cross_factor = 0.5;             // share of walkers that cross at a crosswalk they reach
   Rng tm_rng;                            // TM-wide draws (respawn points)
 
   dWorldID world = nullptr;
@@ -220,6 +225,7 @@ struct World::Impl {
   // walkers.cpp
   void StepWalkers(double dt);
   void StepControllers(double dt);
+  bool MayCross(const TownCrosswalk& cw) const;
 };
 
 Pose BodyPose(dBodyID b);

@@ -12,7 +12,7 @@ namespace lockstep::ground {
 namespace {
 
 constexpr uint32_t kMagic = 0x47524E44;  // "GRND"
-constexpr uint32_t kVersion = 3;  // 2: every field written explicitly (no struct padding); 3: stop signs, contacts of the last step
+constexpr uint32_t kVersion = 3;  // 2: every field written explicitly (no struct padding); 3: stop signs, contacts of the last step, crosswalks
 
 class Writer {
  public:
@@ -327,7 +327,9 @@ std::vector<uint8_t> World::Save() const {
     w.Pod(c.id), w.Pod(c.walker), w.Pod(c.running), w.Pod(c.max_speed), w.Pod(c.has_goal), w.V(c.goal);
     PutWaypoints(w, c.path);
     w.Pod(c.rng.s);
+    w.Pod<int32_t>(c.crossing), w.Pod<int32_t>(c.cross_end), w.Pod(c.cross_wait), w.Pod<int32_t>(c.last_crosswalk);
   }
+  w.Pod(I.cross_factor);
   w.Pod<uint32_t>(static_cast<uint32_t>(I.last_contacts.size()));
   for (const auto& [a, b] : I.last_contacts) w.Pod(a), w.Pod(b);
   return std::move(w.out);
@@ -401,8 +403,15 @@ std::unique_ptr<World> World::Restore(std::shared_ptr<const Town> town, const st
     c.goal = r.V();
     c.path = GetWaypoints(r, m);
     r.Get(&c.rng.s);
+    c.crossing = r.Pod<int32_t>();
+    c.cross_end = r.Pod<int32_t>();
+    r.Get(&c.cross_wait);
+    c.last_crosswalk = r.Pod<int32_t>();
+    if (c.crossing >= static_cast<int>(town->Crosswalks().size()) || c.cross_end < 0 || c.cross_end > 1)
+      throw std::runtime_error("ground state: bad crosswalk of a walker controller");
     I.controllers.emplace(c.id, std::move(c));
   }
+  r.Get(&I.cross_factor);
   const auto ncontacts = r.Pod<uint32_t>();
   for (uint32_t k = 0; k < ncontacts; ++k) {
     const auto a = r.Pod<uint32_t>();

@@ -1,5 +1,6 @@
 #include "lockstep/ground/town.h"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -30,6 +31,34 @@ Town::Town(map::Map map, std::vector<map::Mesh> meshes) : map_(std::move(map)), 
   signs_ = map_.StopSigns();
   for (size_t i = 0; i < signs_.size(); ++i) {
     for (const auto& wp : signs_[i].stop_waypoints) lane_sign_.emplace(std::make_tuple(wp.road, wp.section, wp.lane), static_cast<int>(i));
+  }
+  for (const auto& poly : map_.Crosswalks()) {
+    if (poly.size() < 3) continue;
+    TownCrosswalk cw;
+    const size_t n = poly.size() - 1;  // the first corner is repeated last
+    for (size_t k = 0; k < n; ++k) cw.centre += poly[k] / static_cast<double>(n);
+    const auto wp = map_.NearestWaypoint(cw.centre);
+    if (!wp) continue;
+    // Across the road: the polygon's extent along the lane's normal, half a metre more.
+    const Eigen::Vector3d normal(-std::sin(wp->transform.yaw), std::cos(wp->transform.yaw), 0);
+    double half = 0;
+    for (size_t k = 0; k < n; ++k) half = std::max(half, std::abs((poly[k] - cw.centre).dot(normal)));
+    cw.ends[0] = cw.centre - normal * (half + 0.5);
+    cw.ends[1] = cw.centre + normal * (half + 0.5);
+    // Lights at the ends of the lanes it crosses, if their stop line is near.
+    std::vector<map::Waypoint> lanes{*wp};
+    if (auto other = map_.LeftLane(*wp); other && other->lane_type == map::LaneType::Driving) lanes.push_back(*other);
+    for (const auto& l : lanes) {
+      const int light = LightOfLane(l.road, l.section, l.lane);
+      if (light < 0) continue;
+      for (const auto& stop : lights_[static_cast<size_t>(light)].info.stop_waypoints) {
+        if ((stop.transform.location - cw.centre).head<2>().norm() < 20.0) {
+          cw.lights.push_back(light);
+          break;
+        }
+      }
+    }
+    crosswalks_.push_back(std::move(cw));
   }
   spawn_points_ = map_.SpawnPoints();
   walker_spawn_points_ = map_.PedestrianSpawnPoints();

@@ -13,7 +13,8 @@ namespace {
 constexpr double kSpacing = 2.0;           // m between path points
 constexpr double kComfortDecel = 3.0;      // m/s^2 for planned stops
 constexpr double kYellowDecel = 4.0;       // m/s^2: stop on yellow if this suffices
-constexpr double kMaxLateralAccel = 4.0;   // m/s^2 in curves
+constexpr double kMaxLateralAccel = 4.0;   // m/s^2 in curves (kinematic cars)
+constexpr double kPhysicsLateralAccel = 2.0;  // m/s^2 in curves for cars on physics (they must hold their lane)
 constexpr double kStopSignTime = 2.0;      // s of full stop at a stop sign (docs/ground.md)
 constexpr double kLaneObstacleDistance = 50.0;  // m: a slower leader this close triggers a lane change (CARLA)
 constexpr double kLaneChangeCooldown = 5.0;     // s between two lane changes of a vehicle
@@ -321,7 +322,7 @@ void World::Impl::TmVehicle(VehicleActor* v, double dt, std::map<int, std::vecto
       const Vec3 d1 = Loc(path[i]) - Loc(path[i - 1]), d2 = Loc(path[i + 1]) - Loc(path[i]);
       const double turn = std::abs(Wrap(std::atan2(d2.y(), d2.x()) - std::atan2(d1.y(), d1.x())));
       if (turn < 1e-3) continue;
-      const double v_curve = std::sqrt(kMaxLateralAccel * ds / turn);
+      const double v_curve = std::sqrt((v->kinematic ? kMaxLateralAccel : kPhysicsLateralAccel) * ds / turn);
       target = std::min(target, std::sqrt(v_curve * v_curve + 2 * kComfortDecel * std::max(0.0, arc[i] - half_x)));
     }
 

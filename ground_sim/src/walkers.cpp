@@ -105,6 +105,48 @@ void World::Impl::StepControllers(double dt) {
       w->control.jump = false;
       continue;
     }
+    // Crossing at a crosswalk: wait at the kerb for the walk light (or a gap), then walk
+    // straight over to the other end.
+    if (c.crossing >= 0) {
+      const TownCrosswalk& cw = town->Crosswalks()[static_cast<size_t>(c.crossing)];
+      w->control.jump = false;
+      if (c.cross_wait && !MayCross(cw)) {
+        w->control.speed = 0;
+        continue;
+      }
+      c.cross_wait = false;
+      Vec3 d = cw.ends[c.cross_end] - pos;
+      d.z() = 0;
+      if (d.norm() > 0.3) {
+        w->control.direction = d.normalized();
+        w->control.speed = std::min(c.max_speed, d.norm() / dt);
+        continue;
+      }
+      c.crossing = -1;
+      c.path.clear();
+    }
+    // At a crosswalk's end: cross with the world's cross factor, drawn once per arrival.
+    bool at_kerb = false;
+    for (size_t k = 0; k < town->Crosswalks().size() && c.crossing < 0; ++k) {
+      for (int e = 0; e < 2; ++e) {
+        if ((town->Crosswalks()[k].ends[e] - pos).head<2>().norm() > 1.5) continue;
+        at_kerb = true;
+        if (c.last_crosswalk != static_cast<int>(k)) {
+          c.last_crosswalk = static_cast<int>(k);
+          if (c.rng.Percent(cross_factor * 100.0)) {
+            c.crossing = static_cast<int>(k);
+            c.cross_end = 1 - e;
+            c.cross_wait = true;
+          }
+        }
+        break;
+      }
+    }
+    if (!at_kerb) c.last_crosswalk = -1;
+    if (c.crossing >= 0) {
+      w->control.speed = 0;  // starts from the kerb next step, when it may
+      continue;
+    }
     // Wander along sidewalk lanes, random branch at each split, turning back at dead ends.
     auto& path = c.path;
     while (!path.empty() && (path.front().transform.location - pos).head<2>().norm() < kArrive) path.pop_front();
@@ -147,6 +189,32 @@ void World::Impl::StepControllers(double dt) {
     w->control.speed = c.max_speed;
     w->control.jump = false;
   }
+}
+
+// Walk light: every light of the lanes crossed is red for the vehicles; without lights,
+// no vehicle near the crosswalk and none approaching within 25 m.
+bool World::Impl::MayCross(const TownCrosswalk& cw) const {
+  if (!cw.lights.empty()) {
+    for (int l : cw.lights) {
+      if (lights[static_cast<size_t>(l)].color != LightColor::kRed) return false;
+    }
+    return true;
+  }
+  for (const auto& [id, v] : vehicles) {
+    const Vec3 p = ToVec(dBodyGetPosition(v->body));
+    const Vec3 vel = v->kinematic ? Vec3(BodyPose(v->body).orientation * Vec3(v->tm.speed, 0, 0)) : ToVec(dBodyGetLinearVel(v->body));
+    const Vec3 to = cw.centre - p;
+    const double d = to.head<2>().norm();
+    if (d < 4.0) return false;
+    if (d < 25.0 && vel.head<2>().norm() > 0.5 && vel.head<2>().dot(to.head<2>()) > 0) return false;
+  }
+  return true;
+}
+
+std::string World::SetPedestriansCrossFactor(double factor) {
+  if (!(factor >= 0 && factor <= 1)) return "pedestrians cross factor must be in 0..1";
+  impl_->cross_factor = factor;
+  return {};
 }
 
 std::string World::ControllerStart(uint32_t id) {

@@ -95,6 +95,23 @@ inline std::shared_ptr<const Town> StopSignTown() {
   return std::make_shared<Town>(std::move(m), std::move(meshes));
 }
 
+// 300 m road along +x from x = -100 (lanes 1 and -1), a crosswalk across it at x = 100
+// (3 m wide along the road, 7 m across).
+inline std::shared_ptr<const Town> CrosswalkTown() {
+  static std::shared_ptr<const Town> town = [] {
+    std::string xodr = StraightRoadXodr();
+    const std::string cw = R"(<objects><object id="cw" type="crosswalk" s="200" t="0" zOffset="0" hdg="0" length="3" width="7">
+  <outline><cornerLocal u="-1.5" v="-3.5" z="0"/><cornerLocal u="1.5" v="-3.5" z="0"/><cornerLocal u="1.5" v="3.5" z="0"/>
+  <cornerLocal u="-1.5" v="3.5" z="0"/></outline></object></objects>
+</road>)";
+    xodr.replace(xodr.find("</road>"), 7, cw);
+    map::Map m = map::Map::FromString(xodr, "crosswalk");
+    std::vector<map::Mesh> meshes = map::BuildRoadMeshes(m);
+    return std::make_shared<const Town>(std::move(m), std::move(meshes));
+  }();
+  return town;
+}
+
 inline std::shared_ptr<const Town> Town01() {
   static std::shared_ptr<const Town> town = Town::Load(std::string(LOCKSTEP_CARLA_MAPS_DIR) + "/Town01.xodr", 42);
   return town;

@@ -291,3 +291,81 @@ TEST(GroundTraffic, Town01HundredVehiclesFiftyWalkersTenMinutes) {
 
 }  // namespace
 }  // namespace lockstep::ground
+
+namespace lockstep::ground {
+namespace {
+
+// The same town with every car on ODE physics (no hybrid mode), one simulated minute:
+// physics cars hold their lanes through the junction turns (no vehicle touches
+// another, none leaves the road into the town's statics) and stop for red lights.
+// bench/run ground runs this mode for longer.
+TEST(GroundTraffic, Town01HundredPhysicsCarsOneMinute) {
+  World w(testing::Town01(), 2017);
+  const auto rep = Populate(&w, 100, 50, 2017, 1000);
+  ASSERT_EQ(rep.vehicles.size(), 100u);
+  std::set<std::pair<uint32_t, uint32_t>> vehicle_pairs;
+  int static_hits = 0;
+  for (int i = 0; i < 1200; ++i) {
+    w.Step(kDt);
+    for (const auto& c : w.Collisions()) {
+      if (!w.IsVehicle(c.actor)) continue;
+      if (c.other_kind == ObjectKind::kVehicle) vehicle_pairs.insert({std::min(c.actor, c.other_actor), std::max(c.actor, c.other_actor)});
+      if (c.other_kind == ObjectKind::kStatic) ++static_hits;
+    }
+  }
+  int red = 0, kinematic = 0;
+  for (const auto& v : w.Vehicles()) red += v.infractions.red_lights, kinematic += v.kinematic;
+  EXPECT_EQ(kinematic, 0);
+  EXPECT_TRUE(vehicle_pairs.empty()) << vehicle_pairs.size() << " pairs, first " << vehicle_pairs.begin()->first << " and "
+                                     << vehicle_pairs.begin()->second;
+  EXPECT_EQ(static_hits, 0);
+  EXPECT_EQ(red, 0);
+}
+
+}  // namespace
+}  // namespace lockstep::ground
+
+namespace lockstep::ground {
+namespace {
+
+// A walker of controller.ai.walker at a crosswalk (no lights): it waits at the kerb while
+// a car approaches, crosses once the car has passed, and nobody is hit.
+TEST(GroundTraffic, AWalkerCrossesAtTheCrosswalkAfterTheCarPasses) {
+  auto town = testing::CrosswalkTown();
+  ASSERT_EQ(town->Crosswalks().size(), 1u);
+  const auto& cw = town->Crosswalks()[0];
+  EXPECT_NEAR(cw.centre.x(), 100, 0.01);
+  World w(town, 3);
+  ASSERT_EQ(w.SetPedestriansCrossFactor(1.0), "");
+  EXPECT_NE(w.SetPedestriansCrossFactor(1.5), "");
+  const Vec3 half = FindVehicle("vehicle.audi.tt")->half_extents;
+  ASSERT_EQ(w.AddVehicle(5, "vehicle.audi.tt", {}, Pose::FromYaw(Vec3(0, -1.75, half.z() + 0.02), 0)), "");
+  ASSERT_EQ(w.SetAutopilot(5, true), "");
+  const Vec3 kerb = cw.ends[0].y() < 0 ? cw.ends[0] : cw.ends[1];  // the south kerb
+  ASSERT_LT(kerb.y(), -3.5);
+  EXPECT_NEAR((cw.ends[0] + cw.ends[1]).y(), 0.0, 1e-6);  // one on each side
+  ASSERT_EQ(w.AddWalker(9, "walker.pedestrian.0001", {}, Pose::FromYaw(kerb + Vec3(0, 0, 1.0), M_PI / 2)), "");
+  ASSERT_EQ(w.AddWalkerController(10, 9), "");
+  // Start walking when the car is at speed and about 20 m before the crosswalk.
+  int i = 0;
+  for (; i < 400 && w.Vehicle(5)->pose.position.x() < 78; ++i) w.Step(kDt);
+  ASSERT_GT(w.Vehicle(5)->velocity.norm(), 5.0);
+  ASSERT_EQ(w.ControllerStart(10), "");
+  bool on_road = false;
+  double car_x_when_on_road = 0;
+  for (; i < 1200; ++i) {
+    w.Step(kDt);
+    for (const auto& c : w.Collisions()) ASSERT_NE(c.other_kind, ObjectKind::kWalker) << "step " << i;
+    const double y = w.Walker(9)->pose.position.y();
+    if (!on_road && std::abs(y) < 3.5) {
+      on_road = true;
+      car_x_when_on_road = w.Vehicle(5)->pose.position.x();
+    }
+  }
+  ASSERT_TRUE(on_road) << "the walker never crossed";
+  EXPECT_GT(car_x_when_on_road - half.x(), 101.5) << "it stepped onto the road before the car had passed";
+  EXPECT_GT(w.Walker(9)->pose.position.y(), 3.0) << "it reached the other side";
+}
+
+}  // namespace
+}  // namespace lockstep::ground

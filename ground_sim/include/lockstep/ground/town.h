@@ -19,6 +19,15 @@ struct TownLight {
   int group = 0;                      // lights of one junction cycle together
 };
 
+// A crosswalk of the map (OpenDRIVE objects of type crosswalk): where it meets the
+// sidewalks on both sides of the road, and the traffic lights of the lanes it crosses
+// (walkers may cross when all of them are red for the vehicles).
+struct TownCrosswalk {
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  Eigen::Vector3d ends[2] = {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
+  std::vector<int> lights;
+};
+
 class Town {
  public:
   // meshes: the static collision (map::BuildWorldMeshes or hand-made for tests).
@@ -42,6 +51,7 @@ class Town {
   // travel direction, NaN if none. Vehicles keep the last sign they passed (CARLA's
   // speed-limit trigger boxes set the vehicle's limit; 30 km/h until the first).
   double SignSpeedLimit(const map::Waypoint& wp) const;
+  const std::vector<TownCrosswalk>& Crosswalks() const { return crosswalks_; }
   const std::vector<map::Transform>& SpawnPoints() const { return spawn_points_; }
   const std::vector<map::Transform>& WalkerSpawnPoints() const { return walker_spawn_points_; }
   uint64_t Hash() const { return hash_; }
@@ -53,6 +63,7 @@ class Town {
   int group_count_ = 0;
   std::map<std::tuple<int, int, int>, int> lane_light_;
   std::vector<map::TrafficLightInfo> signs_;
+  std::vector<TownCrosswalk> crosswalks_;
   std::map<std::tuple<int, int, int>, int> lane_sign_;
   std::vector<map::Transform> spawn_points_;
   std::vector<map::Transform> walker_spawn_points_;

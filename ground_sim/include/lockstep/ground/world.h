@@ -153,6 +153,10 @@ class World {
   std::string ControllerStop(uint32_t controller);
   std::string ControllerGoTo(uint32_t controller, const Vec3& location);
   std::string ControllerMaxSpeed(uint32_t controller, double speed);
+  // CARLA's world.set_pedestrians_cross_factor: the share (0..1) of AI walkers that cross
+  // the road at a crosswalk they reach (when its lights, if any, are red for vehicles;
+  // else when no vehicle approaches within 25 m). Default 0.5.
+  std::string SetPedestriansCrossFactor(double factor);
 
   // Bodies of other simulators for this step (replaces the previous set).
   void SetExternalBodies(std::vector<ExternalBody> bodies);

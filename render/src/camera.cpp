@@ -72,15 +72,6 @@ Eigen::Matrix4f ProjectionMatrix(const Camera& cam) {
   return p.cast<float>();
 }
 
-void EncodeCarlaDepth(float metres, std::uint8_t* bgra) {
-  const double normalized = std::clamp(static_cast<double>(metres) / kFarPlane, 0.0, 1.0);
-  const auto v = static_cast<std::uint32_t>(std::lround(normalized * (256.0 * 256.0 * 256.0 - 1.0)));
-  bgra[2] = static_cast<std::uint8_t>(v & 0xff);          // R
-  bgra[1] = static_cast<std::uint8_t>((v >> 8) & 0xff);   // G
-  bgra[0] = static_cast<std::uint8_t>((v >> 16) & 0xff);  // B
-  bgra[3] = 255;
-}
-
 double DecodeCarlaDepth(const std::uint8_t* bgra) {
   const double v = bgra[2] + bgra[1] * 256.0 + bgra[0] * 65536.0;
   return kFarPlane * v / (256.0 * 256.0 * 256.0 - 1.0);

@@ -1,11 +1,15 @@
 #include "lockstep/render/images.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
 
 namespace lockstep::render {
+
+// The encoders below write B, G, R, A as one 32-bit word.
+static_assert(std::endian::native == std::endian::little, "images.cpp assumes a little-endian host");
 
 ImageKind AirSimImageKind(const std::string& n) {
   static const std::pair<const char*, ImageKind> names[] = {
@@ -100,10 +104,18 @@ void EncodeImage(ImageKind k, const Camera& cam, const CameraImages& im, std::ui
       // Image rows top first and y down: the pass already writes it that way.
       std::memcpy(dst, im.flow, n * 8);
       return;
-    case ImageKind::kDepth:
+    case ImageKind::kDepth: {
       need(im.depth, "depth");
-      for (std::size_t i = 0; i < n; ++i) EncodeCarlaDepth(im.depth[i], dst + i * 4);
+      // EncodeCarlaDepth on 32-bit words, so the compiler can vectorize the loop.
+      constexpr double kScale = (256.0 * 256.0 * 256.0 - 1.0) / kFarPlane;
+      for (std::size_t i = 0; i < n; ++i) {
+        const double d = std::clamp(static_cast<double>(im.depth[i]) * kScale, 0.0, 256.0 * 256.0 * 256.0 - 1.0);
+        const auto v = static_cast<std::uint32_t>(d + 0.5);
+        const std::uint32_t word = 0xff000000u | ((v & 0xffu) << 16) | (v & 0xff00u) | ((v >> 16) & 0xffu);  // B G R A
+        std::memcpy(dst + i * 4, &word, 4);
+      }
       return;
+    }
     case ImageKind::kDepthFloat:
     case ImageKind::kAirSimDepthPlanar:
       need(im.depth, "depth");
@@ -137,10 +149,10 @@ void EncodeImage(ImageKind k, const Camera& cam, const CameraImages& im, std::ui
     case ImageKind::kSemantic:
       need(im.labels, "labels");
       for (std::size_t i = 0; i < n; ++i) {
-        dst[i * 4 + 0] = 0;
-        dst[i * 4 + 1] = 0;
-        dst[i * 4 + 2] = im.labels[i * 4];
-        dst[i * 4 + 3] = 255;
+        std::uint32_t label;
+        std::memcpy(&label, im.labels + i * 4, 4);
+        const std::uint32_t word = 0xff000000u | ((label & 0xffu) << 16);  // B 0, G 0, R tag, A 255
+        std::memcpy(dst + i * 4, &word, 4);
       }
       return;
     case ImageKind::kInstance:

@@ -23,10 +23,17 @@ enum : std::uint32_t {
   kFeatureRain = 32,
   kFeatureClouds = 64,
   kFeatureVignette = 128,
+  kFeatureNormals = 256,  // OUT_NORMALS: the normals output is computed
+  kFeatureFlow = 512,     // OUT_FLOW: the optical flow output is computed
+  kFeatureGamma22 = 1024, // GAMMA_22: the default gamma 2.2 by a polynomial instead of pow
 };
+constexpr int kNoiseSize = 256;  // lattice of the shaders' value noise (clouds, puddles)
 constexpr int kSlots = 2;  // read-back double buffer: draw camera i+1 while camera i is copied out
 constexpr int kShadowSize = 1024;
 constexpr double kShadowExtent = 60;  // m, half width of the sun's shadow box around the first camera
+// The shadow box centre moves in steps of this (m), so the town's shadow map can be kept
+// while the cameras move inside one step.
+constexpr double kShadowSnap = 8;
 
 struct OutputFormat {
   std::uint32_t bit;
@@ -119,7 +126,15 @@ struct Renderer::Impl {
   Pbo pbos[kSlots][kOutputs];
   GLsync fences[kSlots] = {};
   GLuint shadow_fbo = 0, shadow_tex = 0;
+  GLuint noise_tex = 0;
+  // The static town's shadow map (RenderTuning::static_shadow_cache) and what it was drawn for.
+  GLuint static_shadow_fbo = 0, static_shadow_tex = 0;
+  struct {
+    bool valid = false;
+    Eigen::Vector3f centre, sun;
+  } static_shadow;
   RenderStats stats;
+  RenderTuning tuning;
 
   explicit Impl(DevicePreference pref) : context(pref) {
     Programs(0);  // labels only
@@ -133,9 +148,16 @@ struct Renderer::Impl {
     SetupVertexLayout();
     glBindVertexArray(0);
     glPixelStorei(GL_PACK_ALIGNMENT, 1);
-    // Shadow map of the sun.
-    glGenTextures(1, &shadow_tex);
-    glBindTexture(GL_TEXTURE_2D, shadow_tex);
+    // Shadow map of the sun, and the static town's part of it.
+    MakeShadowMap(&shadow_tex, &shadow_fbo);
+    MakeShadowMap(&static_shadow_tex, &static_shadow_fbo);
+    MakeNoise();
+    AddTrafficLightModel();
+  }
+
+  static void MakeShadowMap(GLuint* tex, GLuint* fbo) {
+    glGenTextures(1, tex);
+    glBindTexture(GL_TEXTURE_2D, *tex);
     glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT24, kShadowSize, kShadowSize, 0, GL_DEPTH_COMPONENT, GL_FLOAT, nullptr);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
@@ -143,13 +165,33 @@ struct Renderer::Impl {
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
     glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
-    glGenFramebuffers(1, &shadow_fbo);
-    glBindFramebuffer(GL_FRAMEBUFFER, shadow_fbo);
-    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, shadow_tex, 0);
+    glGenFramebuffers(1, fbo);
+    glBindFramebuffer(GL_FRAMEBUFFER, *fbo);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, *tex, 0);
     glDrawBuffer(GL_NONE);
     glReadBuffer(GL_NONE);
     glBindFramebuffer(GL_FRAMEBUFFER, 0);
-    AddTrafficLightModel();
+  }
+
+  // Lattice values in [0, 1) from an integer hash of the lattice point (fixed, no seed).
+  void MakeNoise() {
+    std::vector<float> v(static_cast<std::size_t>(kNoiseSize) * kNoiseSize);
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      std::uint32_t x = static_cast<std::uint32_t>(i) * 0x9e3779b9u + 0x7f4a7c15u;
+      x ^= x >> 16;
+      x *= 0x7feb352du;
+      x ^= x >> 15;
+      x *= 0x846ca68bu;
+      x ^= x >> 16;
+      v[i] = static_cast<float>(x >> 8) / 16777216.0f;
+    }
+    glGenTextures(1, &noise_tex);
+    glBindTexture(GL_TEXTURE_2D, noise_tex);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_R32F, kNoiseSize, kNoiseSize, 0, GL_RED, GL_FLOAT, v.data());
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_REPEAT);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_REPEAT);
   }
 
   ~Impl() {
@@ -169,6 +211,9 @@ struct Renderer::Impl {
     }
     glDeleteFramebuffers(1, &shadow_fbo);
     glDeleteTextures(1, &shadow_tex);
+    glDeleteTextures(1, &noise_tex);
+    glDeleteFramebuffers(1, &static_shadow_fbo);
+    glDeleteTextures(1, &static_shadow_tex);
     glDeleteBuffers(1, &model_vbo);
     glDeleteVertexArrays(1, &model_vao);
     glDeleteVertexArrays(1, &sky_vao);
@@ -185,7 +230,8 @@ struct Renderer::Impl {
     static const std::pair<std::uint32_t, const char*> defines[] = {
         {kFeatureColor, "LOCKSTEP_COLOR"}, {kFeatureShadows, "FEATURE_SHADOWS"}, {kFeatureNight, "FEATURE_NIGHT"},
         {kFeatureWet, "FEATURE_WET"},      {kFeaturePuddles, "FEATURE_PUDDLES"}, {kFeatureRain, "FEATURE_RAIN"},
-        {kFeatureClouds, "FEATURE_CLOUDS"}, {kFeatureVignette, "FEATURE_VIGNETTE"}};
+        {kFeatureClouds, "FEATURE_CLOUDS"}, {kFeatureVignette, "FEATURE_VIGNETTE"}, {kFeatureNormals, "OUT_NORMALS"},
+        {kFeatureFlow, "OUT_FLOW"}, {kFeatureGamma22, "GAMMA_22"}};
     const std::string common = shaders::kCommon;
     std::string head = "#version 330 core\n";
     for (const auto& [bit, name] : defines) {
@@ -198,8 +244,14 @@ struct Renderer::Impl {
     return p;
   }
 
-  static std::uint32_t Features(const Camera& cam, const Lighting& l, bool shadows) {
-    if (!(cam.outputs & kOutColor)) return 0;
+  // Shader features of the outputs other than colour.
+  std::uint32_t OutputFeatures(std::uint32_t outputs) const {
+    if (!tuning.output_variants) return kFeatureNormals | kFeatureFlow;
+    return ((outputs & kOutNormals) ? kFeatureNormals : 0u) | ((outputs & kOutFlow) ? kFeatureFlow : 0u);
+  }
+
+  // Shader features of the colour output under this weather.
+  static std::uint32_t ColourFeatures(const Camera& cam, const Lighting& l, bool shadows) {
     std::uint32_t m = kFeatureColor;
     if (shadows) m |= kFeatureShadows;
     if (l.night) m |= kFeatureNight;
@@ -208,6 +260,7 @@ struct Renderer::Impl {
     if (l.rain > 0 && cam.post_process) m |= kFeatureRain;
     if (l.clouds > 0.02f) m |= kFeatureClouds;
     if (cam.lens_circle_multiplier > 0) m |= kFeatureVignette;
+    if (cam.gamma == 2.2 || cam.gamma <= 0.1) m |= kFeatureGamma22;  // SetLighting reads gamma <= 0.1 as 2.2
     return m;
   }
 
@@ -292,11 +345,12 @@ struct Renderer::Impl {
     p.Set("u_camera", cam.pose.position.cast<float>().eval());
   }
 
-  // The sun's shadow map around `centre`; returns the matrix from world to shadow clip.
+  // The sun's shadow map around `centre` (snapped to kShadowSnap); returns the matrix from
+  // world to shadow clip.
   std::optional<Eigen::Matrix4f> DrawShadows(const Lighting& l, const WorldView& world, const Vec3& centre) {
     if (l.sun_color.maxCoeff() <= 0.01f || l.sun_direction.z() <= 0.02f) return std::nullopt;
     const Eigen::Vector3f dir = l.sun_direction;
-    const Eigen::Vector3f c = centre.cast<float>();
+    const Eigen::Vector3f c = (centre / kShadowSnap).array().round().matrix().cast<float>() * static_cast<float>(kShadowSnap);
     const Eigen::Vector3f eye = c + dir * 300.0f;
     Eigen::Vector3f up = std::abs(dir.z()) > 0.95f ? Eigen::Vector3f::UnitX() : Eigen::Vector3f::UnitZ();
     const Eigen::Vector3f f = (c - eye).normalized(), s = f.cross(up).normalized(), u = s.cross(f);
@@ -314,17 +368,34 @@ struct Renderer::Impl {
     proj(2, 2) = -2 / (fa - n);
     proj(2, 3) = -(fa + n) / (fa - n);
     const Eigen::Matrix4f vp = proj * view;
-    glBindFramebuffer(GL_FRAMEBUFFER, shadow_fbo);
+    const Frustum fr(vp);
     glViewport(0, 0, kShadowSize, kShadowSize);
-    glClear(GL_DEPTH_BUFFER_BIT);
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LESS);
+    glDepthMask(GL_TRUE);
     glDisable(GL_CULL_FACE);
     shadow.Use();
     shadow.Set("u_light_view_proj", vp);
     shadow.Set("u_model", Eigen::Matrix4f::Identity().eval());
-    const Frustum fr(vp);
-    stats.triangles += statics.Draw(fr, c, true);
+    auto draw_town = [&] {
+      glClear(GL_DEPTH_BUFFER_BIT);
+      stats.shadow_triangles += statics.Draw(fr, c, true, false, &stats.draw_calls);
+    };
+    if (tuning.static_shadow_cache) {
+      // The town's depth is drawn when the box or the sun moved; each frame starts from a copy.
+      if (!static_shadow.valid || static_shadow.centre != c || static_shadow.sun != dir) {
+        glBindFramebuffer(GL_FRAMEBUFFER, static_shadow_fbo);
+        draw_town();
+        static_shadow = {true, c, dir};
+      }
+      glBindFramebuffer(GL_READ_FRAMEBUFFER, static_shadow_fbo);
+      glBindFramebuffer(GL_DRAW_FRAMEBUFFER, shadow_fbo);
+      glBlitFramebuffer(0, 0, kShadowSize, kShadowSize, 0, 0, kShadowSize, kShadowSize, GL_DEPTH_BUFFER_BIT, GL_NEAREST);
+      glBindFramebuffer(GL_FRAMEBUFFER, shadow_fbo);
+    } else {
+      glBindFramebuffer(GL_FRAMEBUFFER, shadow_fbo);
+      draw_town();
+    }
     glBindVertexArray(model_vao);
     for (const ActorDraw& a : world.actors) {
       auto it = models.find(a.model);
@@ -334,24 +405,51 @@ struct Renderer::Impl {
       shadow.Set("u_model", ModelMatrix(a.pose));
       const GLsizei body = static_cast<GLsizei>(m.rotors.empty() ? m.vertices.size() : m.rotors.front().first);
       glDrawArrays(GL_TRIANGLES, it->second.first, body);
-      stats.triangles += static_cast<std::uint64_t>(body) / 3;
+      stats.shadow_triangles += static_cast<std::uint64_t>(body) / 3;
+      ++stats.draw_calls;
     }
     return vp;
+  }
+
+  void SetDrawBuffers(std::uint32_t outputs) {
+    GLenum bufs[kOutputs];
+    for (int i = 0; i < kOutputs; ++i) {
+      bufs[i] = (outputs & kFormats[i].bit) ? GL_COLOR_ATTACHMENT0 + static_cast<GLenum>(i) : GL_NONE;
+    }
+    glDrawBuffers(kOutputs, bufs);
   }
 
   void DrawCamera(const Camera& cam, const WorldView& world, const Lighting& l, const std::optional<Eigen::Matrix4f>& shadow_vp) {
     Target& t = TargetFor(cam.width, cam.height);
     glBindFramebuffer(GL_FRAMEBUFFER, t.fbo);
-    GLenum bufs[kOutputs];
-    for (int i = 0; i < kOutputs; ++i) {
-      bufs[i] = (cam.outputs & kFormats[i].bit) ? GL_COLOR_ATTACHMENT0 + static_cast<GLenum>(i) : GL_NONE;
-    }
-    glDrawBuffers(kOutputs, bufs);
     glViewport(0, 0, cam.width, cam.height);
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LEQUAL);
     glDepthMask(GL_TRUE);
     glClear(GL_DEPTH_BUFFER_BIT);
+    const std::uint32_t outputs = OutputFeatures(cam.outputs);
+    if (!(cam.outputs & kOutColor)) {
+      SetDrawBuffers(cam.outputs);
+      DrawPass(cam, world, l, shadow_vp, Programs(outputs), true);
+    } else if (tuning.depth_prepass) {
+      // Depth and the cheap outputs first; then the colour pass, depth test only, shades
+      // each visible fragment once (llvmpipe tests depth before running the shader).
+      SetDrawBuffers(cam.outputs & ~kOutColor);
+      DrawPass(cam, world, l, shadow_vp, Programs(outputs), true);
+      SetDrawBuffers(kOutColor);
+      glDepthMask(GL_FALSE);
+      DrawPass(cam, world, l, shadow_vp, Programs(ColourFeatures(cam, l, shadow_vp.has_value())), false);
+      glDepthMask(GL_TRUE);
+    } else {
+      SetDrawBuffers(cam.outputs);
+      DrawPass(cam, world, l, shadow_vp, Programs(ColourFeatures(cam, l, shadow_vp.has_value()) | outputs), true);
+    }
+  }
+
+  // Draws the town, the actors and the sky with one program variant into the bound target.
+  // count: this pass's triangles go into the stats (one pass per camera counts).
+  void DrawPass(const Camera& cam, const WorldView& world, const Lighting& l, const std::optional<Eigen::Matrix4f>& shadow_vp,
+                std::pair<gl::Program, gl::Program>& variant, bool count) {
     const Eigen::Matrix4f proj = ProjectionMatrix(cam), view = ViewMatrix(cam.pose);
     const Pose prev_pose = cam.previous_pose.value_or(cam.pose);
     const Eigen::Matrix4f vp = proj * view, prev_vp = proj * ViewMatrix(prev_pose);
@@ -359,7 +457,6 @@ struct Renderer::Impl {
     glEnable(GL_CULL_FACE);
     glCullFace(GL_BACK);
     glFrontFace(GL_CW);
-    auto& variant = Programs(Features(cam, l, shadow_vp.has_value()));
     gl::Program& scene = variant.first;
     gl::Program& sky = variant.second;
     scene_ptr = &scene;
@@ -376,6 +473,10 @@ struct Renderer::Impl {
       scene.SetInt("u_shadow_map", 0);
       scene.Set("u_shadow_matrix", *shadow_vp);
     }
+    glActiveTexture(GL_TEXTURE1);
+    glBindTexture(GL_TEXTURE_2D, noise_tex);
+    glActiveTexture(GL_TEXTURE0);
+    scene.SetInt("u_noise", 1);
     SetNightLights(cam, world, l);
     scene.Set("u_model", Eigen::Matrix4f::Identity().eval());
     scene.Set("u_prev_model", Eigen::Matrix4f::Identity().eval());
@@ -384,13 +485,15 @@ struct Renderer::Impl {
     scene.SetInt("u_light_state", 3);
     const Frustum fr(vp);
     const Eigen::Vector3f eye = cam.pose.position.cast<float>();
-    stats.triangles += statics.Draw(fr, eye);
-    ++stats.draw_calls;
+    const std::uint64_t before = stats.triangles;
+    stats.triangles += statics.Draw(fr, eye, false, tuning.front_to_back, &stats.draw_calls);
     DrawActors(world, fr);
+    if (!count) stats.triangles = before;
     // Sky where nothing was drawn.
     glDisable(GL_CULL_FACE);
     sky.Use();
     SetLighting(sky, l, cam);
+    sky.SetInt("u_noise", 1);
     Eigen::Matrix4f view_rot = view, prev_rot = ViewMatrix(prev_pose);
     view_rot.topRightCorner<3, 1>().setZero();
     prev_rot.topRightCorner<3, 1>().setZero();
@@ -544,6 +647,7 @@ const DeviceInfo& Renderer::device() const { return impl_->context.device(); }
 void Renderer::SetStaticScene(const std::vector<map::Mesh>& meshes, const std::vector<Vec3>& lamps, const StaticSceneOptions& options) {
   impl_->context.MakeCurrent();
   impl_->statics.Build(meshes, lamps, options);
+  impl_->static_shadow.valid = false;
   impl_->stats.static_triangles = impl_->statics.triangles;
 }
 
@@ -554,6 +658,8 @@ const Model* Renderer::FindModel(const std::string& key) const {
   return it == impl_->models.end() ? nullptr : &it->second.model;
 }
 const RenderStats& Renderer::stats() const { return impl_->stats; }
+void Renderer::SetTuning(const RenderTuning& tuning) { impl_->tuning = tuning; }
+const RenderTuning& Renderer::tuning() const { return impl_->tuning; }
 
 void Renderer::Render(const std::vector<Camera>& cameras, const WorldView& world, const Sink& sink) {
   for (const Camera& c : cameras) {
@@ -565,6 +671,7 @@ void Renderer::Render(const std::vector<Camera>& cameras, const WorldView& world
   Impl& s = *impl_;
   s.context.MakeCurrent();  // another renderer in this process may have made its own current
   s.stats.triangles = 0;
+  s.stats.shadow_triangles = 0;
   s.stats.draw_calls = 0;
   s.UploadModels();
   const Lighting l = ComputeLighting(world.weather);

@@ -34,17 +34,26 @@ uint Hash(uint x) {
 float Hash2(vec2 p) {
   return float(Hash(floatBitsToUint(p.x) ^ Hash(floatBitsToUint(p.y) + 0x9e3779b9u))) / 4294967295.0;
 }
+// Value noise with smoothstep between lattice points. The lattice values are a 256 x 256
+// texture (repeating): one bilinear fetch at the smoothstepped position costs llvmpipe
+// far less than hashing four corners.
+uniform sampler2D u_noise;
 float Noise(vec2 p) {
   vec2 i = floor(p), f = fract(p);
   vec2 u = f * f * (3.0 - 2.0 * f);
-  return mix(mix(Hash2(i), Hash2(i + vec2(1, 0)), u.x), mix(Hash2(i + vec2(0, 1)), Hash2(i + vec2(1, 1)), u.x), u.y);
+  return texture(u_noise, (i + u + 0.5) * (1.0 / 256.0)).r;
 }
 vec3 SkyColor(vec3 dir) {
   float h = clamp(dir.z, -0.2, 1.0);
   vec3 c = mix(u_sky_horizon, u_sky_zenith, pow(max(h, 0.0), 0.6));
   if (h < 0.0) c = u_sky_horizon * 0.8;
-  float sd = dot(dir, u_sun_dir);
-  c += u_sun_color * (pow(max(sd, 0.0), 900.0) * 6.0 + pow(max(sd, 0.0), 12.0) * 0.12);
+  // Sun disc and glow: sd^900 and sd^12 by squaring (llvmpipe's pow is a log and an exp).
+  float s1 = max(dot(dir, u_sun_dir), 0.0);
+  float s2 = s1 * s1, s4 = s2 * s2, s12 = s4 * s4 * s4;
+  float s60 = s12 * s12 * s12 * s12 * s12;
+  float s300 = s60 * s60 * s60 * s60 * s60;
+  float s900 = s300 * s300 * s300;
+  c += u_sun_color * (s900 * 6.0 + s12 * 0.12);
 #ifdef FEATURE_CLOUDS
   if (dir.z > 0.01) {
     vec2 uv = dir.xy / dir.z * 2.0;
@@ -80,7 +89,14 @@ vec3 Finish(vec3 c, vec2 frag) {
   vec2 q = (frag / u_size - 0.5) * 2.0;
   c *= clamp(1.0 - u_vignette * pow(length(q) / 1.4142, u_vignette_falloff), 0.0, 1.0);
 #endif
-  return pow(clamp(c, 0.0, 1.0), vec3(1.0 / u_gamma));
+  c = clamp(c, 0.0, 1.0);
+#ifdef GAMMA_22
+  // c^(1/2.2) as a polynomial in sqrt(c), within 0.64/255 (llvmpipe's pow is a log and an exp).
+  vec3 s = sqrt(c);
+  return s * (1.32276594 + s * (-0.97385348 + s * (1.14817012 - 0.49958284 * s)));
+#else
+  return pow(c, vec3(1.0 / u_gamma));
+#endif
 }
 )";
 
@@ -92,26 +108,36 @@ layout(location = 3) in uint a_label;
 uniform mat4 u_model;
 uniform mat4 u_prev_model;
 uniform vec3 u_paint;
+// The same position in every variant: the colour pass after a depth pre-pass tests
+// against the pre-pass's depth.
+invariant gl_Position;
 out vec3 v_world;
-out vec3 v_normal;
+// Normals are per face (models and town are flat-shaded): one per triangle, not interpolated.
+flat out vec3 v_normal;
+flat out vec2 v_wall;  // horizontal direction along a wall (building windows)
 flat out vec3 v_albedo;
 flat out uint v_label;
 flat out uint v_material;
+#ifdef OUT_FLOW
 out vec4 v_clip;
 out vec4 v_prev_clip;
+#endif
 out float v_depth;
 void main() {
   vec4 w = u_model * vec4(a_pos, 1.0);
   v_world = w.xyz;
-  v_normal = mat3(u_model) * a_normal;
+  v_normal = normalize(mat3(u_model) * a_normal);
+  v_wall = normalize(vec2(-v_normal.y, v_normal.x) + vec2(1e-9, 0.0));
   v_label = a_label;
   v_material = uint(a_color.a * 255.0 + 0.5);
   // Linear albedo per vertex (flat): the fragment shader has no gamma to undo.
   v_albedo = pow(v_material == 1u ? u_paint : a_color.rgb, vec3(2.2));
-  v_clip = u_view_proj * w;
-  v_prev_clip = u_prev_view_proj * (u_prev_model * vec4(a_pos, 1.0));
   v_depth = -(u_view * w).z;
-  gl_Position = v_clip;
+  gl_Position = u_view_proj * w;
+#ifdef OUT_FLOW
+  v_clip = gl_Position;
+  v_prev_clip = u_prev_view_proj * (u_prev_model * vec4(a_pos, 1.0));
+#endif
 }
 )";
 
@@ -119,12 +145,15 @@ void main() {
 // llvmpipe runs both sides of every branch, so unused code would cost every pixel.
 inline constexpr const char* kSceneFragment = R"(
 in vec3 v_world;
-in vec3 v_normal;
+flat in vec3 v_normal;
+flat in vec2 v_wall;
 flat in vec3 v_albedo;
 flat in uint v_label;
 flat in uint v_material;
+#ifdef OUT_FLOW
 in vec4 v_clip;
 in vec4 v_prev_clip;
+#endif
 in float v_depth;
 uniform uint u_instance;
 uniform bool u_lights_on;
@@ -145,17 +174,26 @@ layout(location = 3) out vec4 o_normal;
 layout(location = 4) out vec2 o_flow;
 
 void main() {
-  vec3 n = normalize(v_normal);
+  vec3 n = v_normal;
   if (!gl_FrontFacing) n = -n;
   uint tag = v_label & 255u;
   uint inst = v_label >> 8;
   if (inst == 0u) inst = u_instance;
   o_label = uvec4(tag, inst & 255u, (inst >> 8) & 255u, (inst >> 16) & 255u);
   o_depth = v_depth;
+  // Normals and flow only in the variants that output them (OUT_* defines).
+#ifdef OUT_NORMALS
   vec3 en = normalize(mat3(u_view) * n);
   o_normal = vec4(en.zyx * 0.5 + 0.5, 1.0);  // stored B, G, R, A: R = x (read back as bytes)
+#else
+  o_normal = vec4(0.0);
+#endif
+#ifdef OUT_FLOW
   vec2 ndc = v_clip.xy / v_clip.w, prev = v_prev_clip.xy / v_prev_clip.w;
   o_flow = ndc - prev;
+#else
+  o_flow = vec2(0.0);
+#endif
 #ifndef LOCKSTEP_COLOR
   o_color = vec4(0.0);  // a pass without colour output skips the lighting
 #else
@@ -172,7 +210,7 @@ void main() {
 #endif
   if (mat == 10u && abs(n.z) < 0.5) {
     // Building windows: a grid on the walls, some lit at night.
-    float along = dot(v_world.xy, normalize(vec2(-n.y, n.x)));
+    float along = dot(v_world.xy, gl_FrontFacing ? v_wall : -v_wall);
     vec2 cell = vec2(along / 2.6, (v_world.z + 0.2) / 3.2);
     vec2 f = fract(cell);
     if (f.x > 0.25 && f.x < 0.75 && f.y > 0.3 && f.y < 0.8) {
@@ -260,8 +298,12 @@ void main() {
   o_label = uvec4(11u, 0u, 0u, 0u);
   o_depth = 1000.0;
   o_normal = vec4(0.0);
+#ifdef OUT_FLOW
   vec4 prev = u_prev_view_proj_rot * vec4(dir, 0.0);
   o_flow = prev.w > 0.0 ? v_ndc - prev.xy / prev.w : vec2(0.0);
+#else
+  o_flow = vec2(0.0);
+#endif
 #ifndef LOCKSTEP_COLOR
   o_color = vec4(0.0);
 #else

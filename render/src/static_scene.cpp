@@ -180,27 +180,41 @@ void StaticScene::Build(const std::vector<map::Mesh>& meshes, const std::vector<
   glBindVertexArray(0);
 }
 
-std::uint64_t StaticScene::Draw(const Frustum& frustum, const Eigen::Vector3f& eye, bool casters_only) const {
+std::uint64_t StaticScene::Draw(const Frustum& frustum, const Eigen::Vector3f& eye, bool casters_only, bool front_to_back,
+                                std::uint64_t* draw_calls) const {
   if (!vao) return 0;
   glBindVertexArray(vao);
-  std::uint64_t drawn = 0;
+  std::vector<std::pair<float, const Cell*>> visible;
+  visible.reserve(cells.size());
   for (const Cell& c : cells) {
     if (!frustum.Visible(c.box)) continue;
     const Eigen::Vector3f nearest = eye.cwiseMax(c.box.lo).cwiseMin(c.box.hi);
-    const float d = (nearest - eye).head<2>().norm();
+    visible.emplace_back((nearest - eye).head<2>().norm(), &c);
+  }
+  if (front_to_back) {
+    std::stable_sort(visible.begin(), visible.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
+  }
+  std::uint64_t drawn = 0, calls = 0;
+  for (const auto& [d, cell] : visible) {
+    const Cell& c = *cell;
     GLsizei count = c.base;
     if (d < options.detail_distance) count += c.large;
     if (d < options.detail_distance && d < options.small_distance) count += c.small;
     if (d < options.detail_distance && d < options.small_distance && d < options.marking_distance) count += c.markings;
     const GLint first = casters_only ? c.first + c.base : c.first;
     if (casters_only) count = std::min<GLsizei>(count - c.base, c.large + c.small);
-    if (count > 0) glDrawArrays(GL_TRIANGLES, first, count);
+    if (count > 0) {
+      glDrawArrays(GL_TRIANGLES, first, count);
+      ++calls;
+    }
     drawn += static_cast<std::uint64_t>(std::max<GLsizei>(count, 0)) / 3;
     if (d >= options.detail_distance && c.far.count > 0) {
       glDrawArrays(GL_TRIANGLES, c.far.first, c.far.count);
       drawn += static_cast<std::uint64_t>(c.far.count) / 3;
+      ++calls;
     }
   }
+  if (draw_calls) *draw_calls += calls;
   return drawn;
 }
 

@@ -52,7 +52,9 @@ struct StaticScene {
   void Build(const std::vector<map::Mesh>& meshes, const std::vector<Vec3>& lamp_positions, const StaticSceneOptions& opt);
   // Appends the draws for one camera; returns the triangles drawn. casters_only: the sun's
   // shadow pass, which leaves out the ground level (roads, sidewalks, terrain cast nothing).
-  std::uint64_t Draw(const Frustum& frustum, const Eigen::Vector3f& eye, bool casters_only = false) const;
+  // front_to_back: cells nearest the eye first. draw_calls, if given, is incremented per draw.
+  std::uint64_t Draw(const Frustum& frustum, const Eigen::Vector3f& eye, bool casters_only = false, bool front_to_back = false,
+                     std::uint64_t* draw_calls = nullptr) const;
   void Release();
 };
 

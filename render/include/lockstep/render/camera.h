@@ -2,6 +2,7 @@
 // Camera model as CARLA's: a pinhole from the horizontal field of view, principal point
 // at the image centre; the camera looks along its body +x with body +z up. Pixel (u, v)
 // covers [u, u+1) x [v, v+1), v grows downwards, row 0 is the top row.
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <optional>
@@ -42,7 +43,16 @@ Eigen::Matrix4f ViewMatrix(const Pose& pose);
 Eigen::Matrix4f ProjectionMatrix(const Camera& cam);
 
 // CARLA's depth encoding: normalized = (R + G*256 + B*65536) / (256^3 - 1), metres = 1000 * normalized.
-void EncodeCarlaDepth(float metres, std::uint8_t* bgra);
+// Inline: the depth image encodes every pixel with it.
+inline void EncodeCarlaDepth(float metres, std::uint8_t* bgra) {
+  const double normalized = std::clamp(static_cast<double>(metres) / kFarPlane, 0.0, 1.0);
+  // Rounds half up, as std::lround does for these non-negative values, without its call.
+  const auto v = static_cast<std::uint32_t>(normalized * (256.0 * 256.0 * 256.0 - 1.0) + 0.5);
+  bgra[2] = static_cast<std::uint8_t>(v & 0xff);          // R
+  bgra[1] = static_cast<std::uint8_t>((v >> 8) & 0xff);   // G
+  bgra[0] = static_cast<std::uint8_t>((v >> 16) & 0xff);  // B
+  bgra[3] = 255;
+}
 double DecodeCarlaDepth(const std::uint8_t* bgra);
 
 // CARLA 0.9.14+ palette (29 classes, ids 0..28); unknown ids are black.

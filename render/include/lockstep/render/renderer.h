@@ -77,9 +77,19 @@ struct CameraFrame {
 };
 
 struct RenderStats {
-  std::uint64_t triangles = 0;    // drawn in the last Render call, all cameras
-  std::uint64_t draw_calls = 0;
+  std::uint64_t triangles = 0;         // in the cameras' views after culling and LOD, last Render call, all cameras
+  std::uint64_t shadow_triangles = 0;  // drawn into the sun's shadow map in the last Render call
+  std::uint64_t draw_calls = 0;        // all passes
   std::uint64_t static_triangles = 0;  // of the whole static scene at full detail
+};
+
+// Speed-ups of the render path. None changes what a camera sees (tests compare the images
+// with each off); all are on by default, the benchmark turns them off to measure them.
+struct RenderTuning {
+  bool output_variants = true;      // shaders compute normals and flow only where a camera outputs them
+  bool depth_prepass = true;        // depth and labels first, then colour shades each visible pixel once
+  bool front_to_back = true;        // town cells drawn nearest first, so hidden fragments fail the depth test early
+  bool static_shadow_cache = true;  // the town's sun shadows kept while sun and shadow box stay; only actors redrawn
 };
 
 class Renderer {
@@ -102,6 +112,8 @@ class Renderer {
   void Render(const std::vector<Camera>& cameras, const WorldView& world, const Sink& sink);
   std::vector<CameraFrame> RenderFrames(const std::vector<Camera>& cameras, const WorldView& world);
   const RenderStats& stats() const;
+  void SetTuning(const RenderTuning& tuning);
+  const RenderTuning& tuning() const;
 
  private:
   struct Impl;

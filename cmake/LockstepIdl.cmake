@@ -17,6 +17,10 @@ function(lockstep_fastdds_idl target)
   foreach(idl ${G_FILES})
     get_filename_component(name ${idl} NAME_WE)
     set(generated ${out}/${name}.h ${out}/${name}.cxx ${out}/${name}PubSubTypes.h ${out}/${name}PubSubTypes.cxx)
+    # fastddsgen preprocesses into <tmp>/<name>.idl.cc; the default /tmp is shared by
+    # every checkout on the machine, so concurrent builds read each other's files.
+    set(tmp ${gen_root}/tmp/${name})
+    file(MAKE_DIRECTORY ${tmp})
     add_custom_command(
       OUTPUT ${generated}
       COMMAND ${FASTDDSGEN} -replace -t ${tmp} -I ${G_INCLUDE_DIR} -d ${out} ${idl}

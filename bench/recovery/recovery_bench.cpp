@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "lockstep/runtime/domain_lock.h"
 #include "lockstep/runtime/log.h"
 #include "lockstep/runtime/messages.h"
 
@@ -28,12 +29,13 @@ using Clock = std::chrono::steady_clock;
 
 std::string BinDir() { return std::filesystem::canonical("/proc/self/exe").parent_path().string(); }
 
-pid_t Spawn(std::vector<std::string> argv) {
+// Starts a process with its output in `log` (kept for a look when a kill goes slowly).
+pid_t Spawn(std::vector<std::string> argv, const std::string& log) {
   pid_t pid = fork();
   if (pid == 0) {
-    const int null = open("/dev/null", O_WRONLY);
-    dup2(null, 1);
-    dup2(null, 2);
+    const int out = open(log.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+    dup2(out, 1);
+    dup2(out, 2);
     std::vector<char*> args;
     for (auto& a : argv) args.push_back(a.data());
     args.push_back(nullptr);
@@ -52,7 +54,7 @@ double Median(std::vector<double> v) {
 
 int main(int argc, char** argv) {
   const int kills = argc > 1 ? std::atoi(argv[1]) : 5;
-  const int domain = 100 + getpid() % 100;
+  const int domain = lockstep::LockFreeDdsDomain();  // not one a test or another bench uses now
   lockstep::InitLogging("bench_recovery");
   spdlog::set_level(spdlog::level::warn);
   const std::string config = std::filesystem::temp_directory_path() / ("bench-recovery-" + std::to_string(getpid()) + ".yaml");
@@ -60,8 +62,11 @@ int main(int argc, char** argv) {
                         << "\nparticipant_profile: lockstep.participant.loopback\nworld:\n  service_timeout: 5\n"
                            "services:\n  - {name: alpha, kind: noop}\n  - {name: beta, kind: noop}\n";
   const std::string bin = BinDir();
-  std::vector<pid_t> pids{Spawn({bin + "/lockstep_coordinator", config}), Spawn({bin + "/lockstep_noop", "--name", "alpha", "--config", config})};
-  pid_t beta = Spawn({bin + "/lockstep_noop", "--name", "beta", "--config", config});
+  const std::string logs = std::filesystem::temp_directory_path() / ("bench-recovery-" + std::to_string(getpid()));
+  std::filesystem::create_directories(logs);
+  std::vector<pid_t> pids{Spawn({bin + "/lockstep_coordinator", config}, logs + "/coordinator.log"),
+                          Spawn({bin + "/lockstep_noop", "--name", "alpha", "--config", config}, logs + "/alpha.log")};
+  pid_t beta = Spawn({bin + "/lockstep_noop", "--name", "beta", "--config", config}, logs + "/beta-0.log");
 
   auto bus = lockstep::CreateDdsBus({domain, "", "lockstep.participant.loopback", "bench-recovery"});
   std::mutex mu;
@@ -94,7 +99,8 @@ int main(int argc, char** argv) {
     const auto t0 = Clock::now();
     kill(beta, SIGKILL);
     waitpid(beta, nullptr, 0);
-    beta = Spawn({bin + "/lockstep_noop", "--name", "beta", "--config", config});  // the replacement waiting
+    // The replacement waiting.
+    beta = Spawn({bin + "/lockstep_noop", "--name", "beta", "--config", config}, logs + "/beta-" + std::to_string(i + 1) + ".log");
     lock.lock();
     // The frame in flight at the kill may still complete: resume means a frame beyond it.
     const bool seen_fault = cv.wait_for(lock, std::chrono::seconds(30), [&] { return faulted; });
@@ -102,7 +108,7 @@ int main(int argc, char** argv) {
     const bool resumed = cv.wait_for(lock, std::chrono::seconds(60), [&] { return last_frame > at_kill + 1; });
     const auto t1 = Clock::now();
     if (!resumed) {
-      std::fprintf(stderr, "bench_recovery: no frame within 60 s of the kill\n");
+      std::fprintf(stderr, "bench_recovery: no frame within 60 s of the kill (logs in %s)\n", logs.c_str());
       code = 1;
       break;
     }
@@ -117,6 +123,12 @@ int main(int argc, char** argv) {
   for (pid_t p : pids) kill(p, SIGTERM);
   for (pid_t p : pids) waitpid(p, nullptr, 0);
   std::filesystem::remove(config);
+  const bool slow = !resume_ms.empty() && *std::max_element(resume_ms.begin(), resume_ms.end()) > 5000;
+  if (code == 0 && !slow) {
+    std::filesystem::remove_all(logs);
+  } else {
+    std::fprintf(stderr, "bench_recovery: process logs kept in %s\n", logs.c_str());
+  }
   if (code == 0) {
     std::printf("{\"bench\":\"recovery\",\"kills\":%d,\"kill_to_resume_ms\":%.1f,\"kill_to_resume_max_ms\":%.1f,\"detect_ms\":%.1f}\n",
                 kills, Median(resume_ms), *std::max_element(resume_ms.begin(), resume_ms.end()), Median(detect_ms));

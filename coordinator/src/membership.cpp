@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -51,7 +52,12 @@ bool Membership::OnAnnounce(const msg::ServiceAnnounce& a, Clock::time_point now
   m.host = a.host().to_string();
   m.announced_frame = a.last_frame();
   m.ready_announced = a.state() == msg::ServiceState::SERVICE_READY;
-  if (m.stalled_frame != 0 && m.pid != a.pid()) m.stalled_frame = 0;  // a replacement process
+  if (m.pid != 0 && m.pid != a.pid()) {
+    // A replacement process: the stall and the failure were its predecessor's. (Kept, the
+    // launcher would take the replacement, not yet ready, for hung and kill it too.)
+    m.stalled_frame = 0;
+    m.failure.clear();
+  }
   if (a.state() == msg::ServiceState::SERVICE_READY && m.stalled_frame != 0) {
     // Heartbeats alone do not clear a stall: the service must finish the frame.
   } else if (a.state() == msg::ServiceState::SERVICE_READY && m.blueprints != 0 &&
@@ -140,10 +146,22 @@ bool Membership::OnBlueprints(const std::string& service, long count) {
 }
 
 bool Membership::CheckHeartbeats(Clock::time_point now) {
+  // The caller runs at least every 100 ms: a longer gap is time it did not run itself
+  // (starved or stopped), and the announcements of that time are still queued behind it.
+  constexpr auto kPeriod = std::chrono::milliseconds(100);
+  if (last_check_ && now - *last_check_ > 2 * kPeriod) {
+    const auto credit = now - *last_check_ - kPeriod;
+    for (auto& [name, m] : members_) m.last_heard = std::min(now, m.last_heard + credit);
+  }
+  last_check_ = now;
+  // A member that missed a heartbeat or so is probed: a process known gone fails at once
+  // (a kill -9 is noticed in about 0.2 s), others at their timeout.
+  const auto missed = std::min<Clock::duration>(heartbeat_timeout_, std::chrono::milliseconds(150));
   bool changed = false;
   for (auto& [name, m] : members_) {
-    if (!m.alive || now - m.last_heard <= heartbeat_timeout_) continue;
+    if (!m.alive || now - m.last_heard <= missed) continue;
     const ProcessState process = probe_ ? probe_(m.host, m.pid) : ProcessState::kUnknown;
+    if (process != ProcessState::kGone && now - m.last_heard <= heartbeat_timeout_) continue;
     if (process == ProcessState::kRunning && now - m.last_heard <= starved_timeout_) continue;
     m.alive = false;
     m.ready = false;

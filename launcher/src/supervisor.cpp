@@ -92,11 +92,21 @@ void Supervisor::Drain(Child& c, bool all) {
 }
 
 void Supervisor::StopAll() {
+  // The clock first: once the coordinator is gone no tick starts, and the services finish
+  // the one in flight together. Stopped at once with the rest, a service could stop
+  // before the last tick reached it while a perception service waits for that service's
+  // output of it (until its input timeout, past the grace period: then it gets SIGKILL).
+  Stop(true);
+  Stop(false);
+}
+
+void Supervisor::Stop(bool coordinator) {
   for (auto& c : children_) {
-    if (c.pid > 0) kill(c.pid, SIGTERM);
+    if (c.pid > 0 && c.spec.is_coordinator == coordinator) kill(c.pid, SIGTERM);
   }
   const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(5);
   for (auto& c : children_) {
+    if (c.spec.is_coordinator != coordinator) continue;
     while (c.pid > 0) {
       int st;
       pid_t r = waitpid(c.pid, &st, WNOHANG);
@@ -110,7 +120,7 @@ void Supervisor::StopAll() {
         c.pid = -1;
         break;
       }
-      Drain(c, true);
+      for (auto& other : children_) Drain(other, false);  // no child blocks on a full pipe meanwhile
       poll(nullptr, 0, 10);
     }
     Drain(c, true);

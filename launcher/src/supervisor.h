@@ -46,7 +46,8 @@ class Supervisor {
   };
   void Start(Child& c);
   void Drain(Child& c, bool all);
-  void StopAll();
+  void StopAll();                 // the coordinator, then the services
+  void Stop(bool coordinator);    // SIGTERM, then SIGKILL after 5 s
   void KillHung();
   void DrawStatus();
   void ClearStatus();

@@ -14,11 +14,13 @@
 #include <cstdlib>
 #include <map>
 #include <mutex>
+#include <optional>
 
 #include "lockstep/runtime/bus.h"
 #include "lockstep/runtime/error.h"
 #include "lockstep/runtime/hash.h"
 #include "lockstep/runtime/log.h"
+#include "lockstep/runtime/shm_sweep.h"
 
 namespace lockstep {
 namespace {
@@ -132,7 +134,21 @@ class DdsBus final : public Bus {
       throw InputError("QoS file '" + file + "' has no participant profile '" + options.participant_profile + "'");
     }
     pqos.name(options.participant_name);
-    participant_ = factory->create_participant(options.domain_id, pqos);
+    {
+      // Choosing and taking the id under a lock: processes starting at once pick different ones.
+      std::optional<runtime::ParticipantIdLock> lock;
+      int id = options.participant_id;
+      if (id < 0) {
+        lock.emplace(options.domain_id);
+        id = runtime::FreshParticipantId(options.domain_id);
+        if (id < 0) {
+          spdlog::warn("every DDS participant id of domain {} was used since the last sweep: run `lockstep clean-shm`",
+                       options.domain_id);
+        }
+      }
+      if (id >= 0) pqos.wire_protocol().participant_id = id;
+      participant_ = factory->create_participant(options.domain_id, pqos);
+    }
     if (!participant_) {
       throw InputError("cannot create a DDS participant on domain " + std::to_string(options.domain_id));
     }

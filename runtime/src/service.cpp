@@ -198,6 +198,7 @@ struct ServiceRunner::Impl {
     NewRun(WaitWorld(0, stop));
     std::optional<msg::Tick> current;
     std::optional<msg::ServiceSnapshot> snap;
+    bool replacing = true;
     {
       // World info and the current tick arrive on different topics: when the run is
       // under way (its status shows completed frames), wait until the tick is here too.
@@ -214,12 +215,14 @@ struct ServiceRunner::Impl {
         cv.wait_until(lock, deadline, [&] { return stop || tick_known(); });
       }
       if (!ticks.empty() && ticks.back().run() == run) current = ticks.back();
+      replacing = Predecessor();
     }
     if (current && current->frame() > 1) {
       // The run is under way: take over at our snapshot (the coordinator keeps a copy of
       // the last one of the process we replace), then replay the run's ticks after it
-      // (published by the coordinator when that process failed).
-      std::optional<msg::TickLog> log = WaitTickLog(current->frame() - 1, stop);
+      // (published by the coordinator when that process failed). A newcomer (the run never
+      // had a member of our name) has no log to wait for: it joins without the past.
+      std::optional<msg::TickLog> log = replacing ? WaitTickLog(current->frame() - 1, stop) : std::nullopt;
       // Take over after the last completed frame: the open tick, or the one after the log's.
       const uint64_t to = log ? std::max<uint64_t>(log->frames(), current->frame() - 1) : current->frame() - 1;
       {
@@ -246,7 +249,7 @@ struct ServiceRunner::Impl {
                 std::to_string(log->first_frame()) + " or later is here: joined run " + std::to_string(run.load()) +
                 " at frame " + std::to_string(to) + " without its past");
       } else if (restored < to) {
-        Diverge("no tick log: joined run " + std::to_string(run.load()) + " at frame " + std::to_string(to) +
+        Diverge(std::string(replacing ? "no tick log" : "a newcomer") + ": joined run " + std::to_string(run.load()) + " at frame " + std::to_string(to) +
                 " without its past" + (restored ? " (snapshot of frame " + std::to_string(restored) + ")" : std::string()));
       }
       last_frame = to;
@@ -258,6 +261,19 @@ struct ServiceRunner::Impl {
     SendAck(last_frame, 0);
     Announce(msg::ServiceState::SERVICE_READY);
     joined = true;
+  }
+
+  // True when the run had a member of our name before us, so the coordinator publishes a
+  // tick log for us once it notices that member failed: another pid, frames acked in
+  // this run, or a failure. Our own STARTING announcement shows our pid and nothing else.
+  // With no status at hand, assume so (waiting for a log is the safe side). Call with mu held.
+  bool Predecessor() const {
+    if (!status || status->run() != run) return true;
+    for (const auto& m : status->members()) {
+      if (m.service().to_string() != options.name) continue;
+      return (m.pid() != 0 && m.pid() != static_cast<int32_t>(getpid())) || m.last_frame() > 0 || !m.failure().to_string().empty();
+    }
+    return false;
   }
 
   // The tick log of the current run covering `frame`, if the coordinator has one.

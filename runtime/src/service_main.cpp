@@ -36,20 +36,14 @@ int RunServiceMain(int argc, char** argv, const std::string& kind, bool percepti
     for (const auto& s : ctx.config.services) {
       if (s.name == name) ctx.self = &s;
     }
-    // Fast DDS 2.9's shared-memory transport can leave the port of a process killed with
-    // SIGKILL unusable: the next participant given the dead one's id reopens its port, the
-    // zombie cleanup deletes the segment the live writers still map, and it hears nothing
-    // (Fast DDS issue 5469, PR 4728). A replacement is exactly such a participant. So a
-    // short-lived placeholder participant takes the lowest free id first (the dead one's,
-    // if there is one) and ours gets another; the placeholder goes once ours exists.
-    // Should the port still be deaf (no coordinator heard within 10 s), join again with a
-    // new participant while the old one still holds its port.
+    // A replacement of a process killed with SIGKILL must not take the dead one's
+    // shared-memory ports (CreateDdsBus picks an unused participant id, see
+    // FreshParticipantId). Should the port still be deaf (no coordinator heard within
+    // 10 s), join again with a new participant while the old one still holds its port.
     std::vector<std::unique_ptr<Bus>> stale;
     constexpr int kAttempts = 3;
     for (int attempt = 1;; ++attempt) {
-      auto placeholder = CreateDdsBus({ctx.config.domain_id, ctx.config.qos_file, ctx.config.participant_profile, name + "-placeholder"});
       auto bus = CreateDdsBus({ctx.config.domain_id, ctx.config.qos_file, ctx.config.participant_profile, name});
-      placeholder.reset();
       ctx.bus = bus.get();
       std::unique_ptr<ServiceCore> core = make_core(ctx);
       try {

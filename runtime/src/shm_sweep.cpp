@@ -85,7 +85,7 @@ ShmSweepResult SweepStaleShm(const std::string& dir_name, double min_age_s) {
   if (ec) return result;
 
   // Participant segments: `fastrtps_<hex>` with its lock `fastrtps_<hex>_el`. Port rings
-  // (`fastrtps_port<N>`) are reused by number and Fast DDS checks them itself.
+  // (`fastrtps_port<N>`) come below.
   for (const auto& name : names) {
     if (!StartsWith(name, "fastrtps_") || !EndsWith(name, "_el") || StartsWith(name, "fastrtps_port")) continue;
     const fs::path lock = dir / name;
@@ -99,11 +99,12 @@ ShmSweepResult SweepStaleShm(const std::string& dir_name, double min_age_s) {
     Remove(lock, result);
   }
 
-  // Data-sharing histories: stale when unmapped and not brand new.
+  // Data-sharing histories and port rings: stale when unmapped and not brand new.
   std::set<std::string> mapped;
   bool scanned = false;
   for (const auto& name : names) {
-    if (!StartsWith(name, "fast_datasharing_")) continue;
+    const bool port = StartsWith(name, "fastrtps_port") && !EndsWith(name, "_el");
+    if (!StartsWith(name, "fast_datasharing_") && !port) continue;
     const fs::path file = dir / name;
     if (!Ours(file)) continue;
     if (!scanned) {
@@ -115,9 +116,47 @@ ShmSweepResult SweepStaleShm(const std::string& dir_name, double min_age_s) {
       ++result.kept_live;
       continue;
     }
+    if (port) {
+      // Its lock file and named mutex go with it, unless someone still uses the mutex.
+      const fs::path sem = dir / ("sem." + name + "_mutex");
+      if (fs::exists(sem, ec) && mapped.count(fs::canonical(sem, ec).string())) {
+        ++result.kept_live;
+        continue;
+      }
+      if (fs::exists(dir / (name + "_el"), ec)) Remove(dir / (name + "_el"), result);
+      if (fs::exists(sem, ec)) Remove(sem, result);
+    }
     Remove(file, result);
   }
   return result;
+}
+
+int FreshParticipantId(int domain, const std::string& dir_name) {
+  // Fast DDS defaults: PB 7400, DG 250, PG 2, d1 10 (metatraffic), d3 11 (user unicast).
+  // 120 ids fit in a domain's 250 ports.
+  const fs::path dir(dir_name);
+  std::error_code ec;
+  for (int id = 0; id < 120; ++id) {
+    const int meta = 7400 + 250 * domain + 10 + 2 * id;
+    if (meta + 1 > 65535) break;
+    const bool used = fs::exists(dir / ("fastrtps_port" + std::to_string(meta)), ec) ||
+                      fs::exists(dir / ("fastrtps_port" + std::to_string(meta + 1)), ec);
+    if (!used) return id;
+  }
+  return -1;
+}
+
+ParticipantIdLock::ParticipantIdLock(int domain) {
+  const fs::path path = fs::temp_directory_path() / ("lockstep-participant-ids-" + std::to_string(domain) + ".lock");
+  fd_ = open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0666);
+  if (fd_ >= 0 && flock(fd_, LOCK_EX) != 0) {
+    close(fd_);
+    fd_ = -1;  // no lock: a rare collision is then caught by the join retry
+  }
+}
+
+ParticipantIdLock::~ParticipantIdLock() {
+  if (fd_ >= 0) close(fd_);  // releases the lock
 }
 
 }  // namespace lockstep::runtime

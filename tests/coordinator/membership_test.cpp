@@ -1,6 +1,8 @@
 #include "lockstep/coordinator/membership.h"
 
 #include <gtest/gtest.h>
+#include <map>
+#include <optional>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -76,7 +78,8 @@ TEST(Membership, ARunningProcessGetsTheStarvedLeaseAStoppedOrGoneOneDoesNot) {
     EXPECT_EQ(probed, 10);
     EXPECT_EQ(failed_early, state != ProcessState::kRunning) << static_cast<int>(state);
     if (state == ProcessState::kRunning) {
-      EXPECT_FALSE(m.CheckHeartbeats(t0 + 5s)) << "exactly the starved lease is still alive";
+      // Checked every 100 ms, as the coordinator does (a longer gap is its own absence).
+      for (auto t = 700ms; t <= 5000ms; t += 100ms) EXPECT_FALSE(m.CheckHeartbeats(t0 + t)) << "the starved lease holds";
       EXPECT_TRUE(m.CheckHeartbeats(t0 + 5001ms));
       std::string who;
       EXPECT_NE(m.FirstMissing(&who).find("runs but is hung"), std::string::npos);
@@ -106,6 +109,62 @@ TEST(Membership, TheLocalProbeReadsProcStateAndIgnoresOtherHosts) {
   EXPECT_EQ(ProbeLocalProcess(host, child), ProcessState::kGone);
   waitpid(child, &st, 0);
   EXPECT_EQ(ProbeLocalProcess(host, child), ProcessState::kGone);
+}
+
+// Checks every 100 ms, as the coordinator's loop does, from `from` to `to`; returns the
+// first time a member was found dead (or nullopt).
+std::optional<Clock::duration> FirstDeath(Membership& m, Clock::time_point t0, Clock::duration from, Clock::duration to) {
+  for (auto t = from; t <= to; t += 100ms) {
+    if (m.CheckHeartbeats(t0 + t)) return t;
+  }
+  return std::nullopt;
+}
+
+TEST(Membership, AGoneProcessFailsOnceItMissedAHeartbeat) {
+  std::map<int32_t, ProcessState> processes{{10, ProcessState::kGone}, {11, ProcessState::kStopped}, {12, ProcessState::kRunning}};
+  Membership m({"a", "b", "c", "d"}, 600ms);
+  m.SetProcessProbe([&](const std::string&, int32_t pid) { return processes.count(pid) ? processes[pid] : ProcessState::kUnknown; },
+                    5s);
+  const auto t0 = Clock::now();
+  m.OnAnnounce(Announce("a", msg::ServiceState::SERVICE_READY, 10), t0);
+  m.OnAnnounce(Announce("b", msg::ServiceState::SERVICE_READY, 11), t0);
+  m.OnAnnounce(Announce("c", msg::ServiceState::SERVICE_READY, 12), t0);
+  m.OnAnnounce(Announce("d", msg::ServiceState::SERVICE_READY, 13), t0);
+  EXPECT_EQ(FirstDeath(m, t0, 0ms, 9s), std::optional<Clock::duration>(200ms)) << "killed: dead at the first check after 150 ms";
+  EXPECT_EQ(m.Find("a")->failure, "sent no heartbeat for 200 ms (its process is gone; pid 10)");
+  EXPECT_TRUE(m.Find("b")->alive && m.Find("c")->alive && m.Find("d")->alive);
+  EXPECT_EQ(FirstDeath(m, t0, 300ms, 9s), std::optional<Clock::duration>(700ms)) << "stopped and unknown: the timeout";
+  EXPECT_FALSE(m.Find("b")->alive);
+  EXPECT_FALSE(m.Find("d")->alive);
+  EXPECT_EQ(FirstDeath(m, t0, 800ms, 9s), std::optional<Clock::duration>(5100ms)) << "running: the starved lease";
+}
+
+// `lockstep up` kills a member reported failed whose pid still runs: a replacement that
+// is still starting must not inherit its predecessor's failure.
+TEST(Membership, AReplacementProcessDoesNotInheritTheFailureOfTheOneItReplaces) {
+  Membership m({"air"}, 600ms);
+  const auto t0 = Clock::now();
+  m.OnAnnounce(Announce("air", msg::ServiceState::SERVICE_READY, 10), t0);
+  m.MarkStalled("air", 5);
+  EXPECT_EQ(m.Find("air")->failure, "timed out on frame 5");
+  m.OnAnnounce(Announce("air", msg::ServiceState::SERVICE_STARTING, 11), t0 + 1s);
+  EXPECT_FALSE(m.Find("air")->alive);
+  EXPECT_EQ(m.Find("air")->failure, "");
+  std::string who;
+  EXPECT_EQ(m.FirstMissing(&who), "has not announced ready");
+  m.OnAnnounce(Announce("air", msg::ServiceState::SERVICE_READY, 11), t0 + 1100ms);
+  EXPECT_EQ(m.FirstMissing(&who), "") << "no stall of its predecessor holds it back";
+}
+
+TEST(Membership, TimeTheCoordinatorItselfDidNotRunIsNotSilence) {
+  Membership m({"air"}, 600ms);
+  const auto t0 = Clock::now();
+  m.OnAnnounce(Announce("air", msg::ServiceState::SERVICE_READY, 10), t0);
+  EXPECT_FALSE(m.CheckHeartbeats(t0 + 100ms));
+  // The coordinator was stopped or starved for a second: the heartbeats of that second
+  // are still queued behind it, so 900 ms of it count as heard from.
+  EXPECT_FALSE(m.CheckHeartbeats(t0 + 1100ms));
+  EXPECT_EQ(FirstDeath(m, t0, 1200ms, 3s), std::optional<Clock::duration>(1600ms)) << "then 600 ms of real silence";
 }
 
 TEST(Membership, AStalledServiceNeedsToFinishTheFrameNotJustHeartbeat) {

@@ -185,7 +185,9 @@ TEST(Launcher, AHungServiceIsKilledAndReplacedLikeACrashedOne) {
   const pid_t fragile = JoinedPid(up.Output(), "fragile");
   ASSERT_GT(fragile, 0);
   kill(fragile, SIGSTOP);  // alive to the kernel, silent to the run
-  ASSERT_TRUE(WaitOutput(up, "fragile     | hung (sent no heartbeat", 20s)) << up.Output();
+  // Silent with its process running: hung (no heartbeat for 3 s, or no ack of the tick
+  // within service_timeout, whichever comes first).
+  ASSERT_TRUE(WaitOutput(up, "fragile     | hung (", 20s)) << up.Output();
   ASSERT_TRUE(WaitOutput(up, "starting a replacement (1 of 5)", 20s)) << up.Output();
   ASSERT_TRUE(WaitOutput(up, "faulted -> running", 30s)) << up.Output();
   EXPECT_GT(JoinedPid(up.Output(), "fragile", 1), 0) << "the replacement joined";

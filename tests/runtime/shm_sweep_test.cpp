@@ -1,5 +1,6 @@
 // The /dev/shm sweep removes exactly what a dead process left: unlocked participant
-// segments and unmapped data-sharing histories; never what a living process holds.
+// segments, unmapped data-sharing histories and port rings; never what a living process
+// holds. A fresh participant id is one no port ring is left of.
 #include "lockstep/runtime/shm_sweep.h"
 
 #include <fcntl.h>
@@ -67,16 +68,44 @@ TEST_F(ShmSweep, KeepsASegmentWhoseLockIsHeld) {
   EXPECT_FALSE(Exists("fastrtps_aa"));
 }
 
-TEST_F(ShmSweep, LeavesPortRingsAndOtherFilesAlone) {
+TEST_F(ShmSweep, RemovesAPortRingNobodyMapsWithItsLockAndMutexAndLeavesOtherFiles) {
   Make("fastrtps_port7411");
   Make("fastrtps_port7411_el", 0);
   Make("sem.fastrtps_port7411_mutex");
+  Make("fastrtps_port7413");  // a living participant's ring: mapped
+  Make("sem.fastrtps_port7413_mutex");
   Make("someone_elses_segment");
+  const int fd = open((dir_ / "fastrtps_port7413").c_str(), O_RDWR);
+  ASSERT_GE(fd, 0);
+  void* map = mmap(nullptr, 4096, PROT_READ, MAP_SHARED, fd, 0);
+  ASSERT_NE(map, MAP_FAILED);
+  close(fd);
   const auto r = SweepStaleShm(dir_.string(), 0);
-  EXPECT_EQ(r.removed_files, 0);
-  EXPECT_TRUE(Exists("fastrtps_port7411"));
-  EXPECT_TRUE(Exists("fastrtps_port7411_el"));
+  EXPECT_EQ(r.removed_files, 3);
+  EXPECT_FALSE(Exists("fastrtps_port7411"));
+  EXPECT_FALSE(Exists("fastrtps_port7411_el"));
+  EXPECT_FALSE(Exists("sem.fastrtps_port7411_mutex"));
+  EXPECT_TRUE(Exists("fastrtps_port7413"));
+  EXPECT_TRUE(Exists("sem.fastrtps_port7413_mutex"));
   EXPECT_TRUE(Exists("someone_elses_segment"));
+  munmap(map, 4096);
+}
+
+TEST_F(ShmSweep, KeepsABrandNewPortRing) {
+  Make("fastrtps_port7411");
+  SweepStaleShm(dir_.string(), 3600);  // a participant may be about to map it
+  EXPECT_TRUE(Exists("fastrtps_port7411"));
+}
+
+// Domain 2: metatraffic unicast port 7400 + 250 * 2 + 10 + 2 * id, user port one above.
+TEST_F(ShmSweep, AFreshParticipantIdHasNoPortRingLeft) {
+  EXPECT_EQ(FreshParticipantId(2, dir_.string()), 0);
+  Make("fastrtps_port7910");  // id 0, metatraffic
+  Make("fastrtps_port7913");  // id 1, user traffic only (its other ring swept or not yet made)
+  Make("fastrtps_port7664");  // domain 1: no matter
+  EXPECT_EQ(FreshParticipantId(2, dir_.string()), 2);
+  EXPECT_EQ(FreshParticipantId(1, dir_.string()), 0);
+  EXPECT_EQ(FreshParticipantId(233, dir_.string()), -1) << "no valid port: Fast DDS picks";
 }
 
 TEST_F(ShmSweep, RemovesAnUnmappedDataSharingHistoryButNotAMappedOne) {
@@ -115,10 +144,10 @@ std::set<std::string> LockFiles() {
 // and removed once it was killed with SIGKILL.
 TEST(ShmSweepFastDds, RemovesTheSegmentOfAKilledParticipantAndKeepsALiveOnes) {
   if (!fs::exists("/dev/shm")) GTEST_SKIP() << "no /dev/shm";
-  const int domain = lockstep::testing::TestDomain();
   int ready[2];
   ASSERT_EQ(pipe(ready), 0);
   const auto before = LockFiles();
+  const int domain = lockstep::testing::TestDomain();
   const pid_t child = fork();
   ASSERT_GE(child, 0);
   if (child == 0) {

@@ -1,5 +1,7 @@
 #include "process.h"
 
+#include "lockstep/runtime/domain_lock.h"
+
 #include <fcntl.h>
 #include <poll.h>
 #include <sys/file.h>
@@ -22,24 +24,8 @@ std::string BinDir() { return LOCKSTEP_TEST_BIN_DIR; }
 std::string Bin(const std::string& name) { return BinDir() + "/" + name; }
 std::string SourceDir() { return LOCKSTEP_TEST_SOURCE_DIR; }
 
-int TestDomain() {
-  // A domain in 1..200 that no other running test process holds: each process keeps an
-  // exclusive lock on a file per domain until it exits (the kernel drops it then, also
-  // after a crash). Starts at a pid-derived offset so processes rarely contend.
-  static const int domain = [] {
-    const int start = static_cast<int>(getpid() % 200);
-    for (int i = 0; i < 200; ++i) {
-      const int d = 1 + (start + i) % 200;
-      const std::string path = std::filesystem::temp_directory_path() / ("lockstep-test-domain-" + std::to_string(d) + ".lock");
-      const int fd = open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0666);
-      if (fd < 0) continue;
-      if (flock(fd, LOCK_EX | LOCK_NB) == 0) return d;  // fd stays open: the lock lives with the process
-      close(fd);
-    }
-    throw std::runtime_error("no free DDS domain for this test process");
-  }();
-  return domain;
-}
+// The lock files are shared with the Python tests and the benchmarks.
+int TestDomain() { return LockFreeDdsDomain(); }
 
 static std::string TempDir() {
   static const std::string dir = [] {

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <functional>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -59,7 +60,10 @@ class Membership {
   bool OnBlueprints(const std::string& service, long count);
   // A new run (reset, map load): per-run values start again.
   void NewRun(uint32_t run);
-  // Marks members silent for longer than the timeout as dead (crashed or stopped).
+  // Marks members silent for longer than the timeout as dead (crashed or stopped); one
+  // whose process the probe sees gone as soon as it missed a heartbeat (150 ms). Time the
+  // caller itself did not run (a gap of over 200 ms between two calls: it was starved or
+  // stopped) counts as heard from: the announcements of that time are still queued.
   bool CheckHeartbeats(Clock::time_point now);
   // A member that did not finish `frame` in time; it stays dead until it acks it.
   void MarkStalled(const std::string& service, uint64_t frame);
@@ -76,6 +80,7 @@ class Membership {
   Clock::duration heartbeat_timeout_;
   ProcessProbe probe_;
   Clock::duration starved_timeout_{};
+  std::optional<Clock::time_point> last_check_;  // of CheckHeartbeats
   std::map<std::string, Member> members_;  // ordered by name
 };
 

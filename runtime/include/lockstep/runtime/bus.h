@@ -164,6 +164,10 @@ struct DdsOptions {
   std::string profiles_file;                         // Fast DDS XML; empty = LOCKSTEP_QOS_FILE or the installed default
   std::string participant_profile = "lockstep.participant";
   std::string participant_name = "lockstep";
+  // Fixes the participant's ports. -1: an id whose shared-memory ports no process used since
+  // the last sweep (runtime::FreshParticipantId), so a participant never inherits the
+  // ports of one killed with SIGKILL; Fast DDS picks when none is left.
+  int participant_id = -1;
 };
 
 std::unique_ptr<Bus> CreateDdsBus(const DdsOptions& options);

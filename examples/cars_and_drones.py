@@ -37,6 +37,9 @@ def main():
             t = carla.Transform(point.location + carla.Location(z=0.1), point.rotation)
             actors.append(world.spawn_actor(bp, t))
         world.tick()
+        # Let the drone come to rest: like AirSim, air_sim refuses a takeoff while it moves.
+        for _ in range(20):
+            world.tick()
 
         air = airsim.MultirotorClient()
         futures = []

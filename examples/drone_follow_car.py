@@ -37,6 +37,9 @@ def main():
         drone = world.spawn_actor(drone_bp, drone_spawn)
         actors.append(drone)
         world.tick()
+        # Let the drone come to rest: like AirSim, air_sim refuses a takeoff while it moves.
+        for _ in range(20):
+            world.tick()
 
         air = airsim.MultirotorClient()
         air.enableApiControl(True, 'follower')
@@ -50,8 +53,10 @@ def main():
 
         distances = []
         for _ in range(args.ticks):
-            n, e, d = ned(car.get_location(), HEIGHT)
-            air.moveToPositionAsync(n, e, d, 12, vehicle_name='follower')
+            # The car's position and velocity, re-sent every tick (Lockstep's trackTargetAsync;
+            # moveToPositionAsync would restart its path each tick).
+            v = car.get_velocity()
+            air.trackTargetAsync(ned(car.get_location(), HEIGHT), (-v.y, v.x, -v.z), 12, 1.0, vehicle_name='follower')
             world.tick()
             p = drone.get_location()
             c = car.get_location()

@@ -195,6 +195,9 @@ def main():
                     sensors[name] = world.spawn_actor(library.find(bp_id), carla.Transform(), attach_to=ego)
                     actors.append(sensors[name])
         world.tick()  # the spawn frame
+        # Let the drone come to rest: like AirSim, air_sim refuses a takeoff while it moves.
+        for _ in range(20):
+            world.tick()
 
         out_dirs = {n: os.path.join(args.out, d) for n, d in (('ground_camera', 'images/ground'),
                                                                ('aerial_camera', 'images/aerial'),
@@ -218,7 +221,8 @@ def main():
         air = airsim.MultirotorClient()
         air.enableApiControl(True, 'follower')
         air.armDisarm(True, 'follower')
-        air.takeoffAsync(vehicle_name='follower').join()
+        if not air.takeoffAsync(vehicle_name='follower').join():
+            print('warning: the drone did not finish its takeoff in time')
         if ego:
             ego.set_autopilot(True)
 
@@ -237,9 +241,12 @@ def main():
         target = ego if ego else None
         for t in range(args.ticks):
             if target is not None:
-                c = target.get_location()
-                air.moveToPositionAsync(drone_spawn.location.y - c.y, c.x - drone_spawn.location.x,
-                                        -(c.z + 10.0 - drone_spawn.location.z), 15, vehicle_name='follower')
+                # 10 m above the ego, in the drone's NED frame (from its spawn point), with the ego's
+                # velocity as feed-forward: trackTargetAsync is re-sent every tick.
+                c, v = target.get_location(), target.get_velocity()
+                air.trackTargetAsync((drone_spawn.location.y - c.y, c.x - drone_spawn.location.x,
+                                      -(c.z + 10.0 - drone_spawn.location.z)), (-v.y, v.x, -v.z), 15, 1.0,
+                                     vehicle_name='follower')
             elif t == 0:
                 air.moveOnPathAsync([airsim.Vector3r(0, 40, -15), airsim.Vector3r(40, 40, -15),
                                      airsim.Vector3r(40, 0, -15), airsim.Vector3r(0, 0, -15)], 6,
@@ -288,6 +295,7 @@ def main():
             'walkers': len(walkers),
             'ego_distance_m': round(sum(math.dist(a, b) for a, b in zip(trajectories['ego']['xy'],
                                                                           trajectories['ego']['xy'][1:])), 1),
+            'drone_height_above_ego_m': round(d.z - (e.z if e else ego_start.location.z), 1),
             'drone_distance_m': round(sum(math.dist(a, b) for a, b in zip(trajectories['drone']['xy'],
                                                                             trajectories['drone']['xy'][1:])), 1),
         }
@@ -302,7 +310,8 @@ def main():
                  '  ground/air frame alignment: %s' % summary['ground_air_frame_alignment'],
                  '  infractions: %d collision event(s), %d lane invasion(s)' % (infractions['collision'],
                                                                                  infractions['lane_invasion']),
-                 '  ego drove %.1f m, the drone flew %.1f m' % (summary['ego_distance_m'], summary['drone_distance_m']),
+                 '  ego drove %.1f m, the drone flew %.1f m and ended %.1f m above the ego' % (
+                     summary['ego_distance_m'], summary['drone_distance_m'], summary['drone_height_above_ego_m']),
                  '  output: %s (images/, lidar/, ticks.csv, summary.json, town.png)' % os.path.relpath(args.out)]
         with open(os.path.join(args.out, 'summary.txt'), 'w') as f:
             f.write('\n'.join(lines) + '\n')

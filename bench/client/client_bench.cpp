@@ -27,6 +27,7 @@
 #include "lockstep/client/client.h"
 #include "lockstep/coordinator/coordinator.h"
 #include "lockstep/runtime/blueprint_builder.h"
+#include "lockstep/runtime/domain_lock.h"
 #include "lockstep/runtime/log.h"
 #include "lockstep/runtime/service.h"
 
@@ -106,7 +107,7 @@ int main(int argc, char** argv) {
   setenv("LOCKSTEP_LOG", "warn", 0);
   lockstep::InitLogging("bench");
   const int ticks = argc > 1 ? std::atoi(argv[1]) : 2000;
-  const int domain = 100 + getpid() % 50;
+  const int domain = lockstep::LockFreeDdsDomain();  // none shared with tests or other benchmarks running now
   const std::string dom = std::to_string(domain);
 
   lockstep::LaunchConfig config;

@@ -98,7 +98,12 @@ struct Client::Impl {
   Bus* bus = nullptr;
 
   mutable std::mutex mu;
+  // Every change notifies `cv`. The waits of a tick (reply, FrameDone, frame state,
+  // sensor deliveries) use `frame_cv`, which only those changes notify: the run status
+  // and tick messages of every frame do not wake a tick() twice more on a busy machine.
   mutable std::condition_variable cv;
+  mutable std::condition_variable frame_cv;
+  std::condition_variable inbox_cv;  // the dispatch thread's: sensor samples arrived
 
   std::optional<msg::WorldInfo> world;
   std::optional<msg::RunStatus> status;
@@ -114,6 +119,7 @@ struct Client::Impl {
   std::map<RunFrame, std::shared_ptr<const msg::AirState>> air;
   std::map<std::pair<uint32_t, uint64_t>, msg::DroneCommandStatus> drone_finished;  // (actor, command id)
   std::map<uint32_t, std::pair<uint64_t, msg::DroneCommandStatus>> drone_last;     // actor -> (id, status)
+  std::map<uint32_t, std::deque<std::string>> drone_failures;  // actor -> air_sim's latest EVENT_COMMAND_FAILED messages
   uint64_t next_seq = 1;
   uint64_t next_drone_command = 1;
   uint64_t drone_id_base = 0;
@@ -154,6 +160,7 @@ struct Client::Impl {
   Reader<msg::Tick> tick_reader;
   Reader<msg::GroundState> ground_reader;
   Reader<msg::AirState> air_reader;
+  Reader<msg::SimEvent> event_reader;
 
   explicit Impl(ClientOptions o) : options(std::move(o)) {
     if (options.domain < 0) options.domain = DefaultDomain();
@@ -177,7 +184,7 @@ struct Client::Impl {
       Update([&] { status = s; });
     });
     done_reader = Reader<msg::FrameDone>(*bus, topics::kFrameDone, [this](const msg::FrameDone& d, const SampleInfo&) {
-      Update([&] {
+      Update(kFrame, [&] {
         if (RunFrame{d.run(), d.frame()} > done) {
           done = {d.run(), d.frame()};
           done_sim_time = d.sim_time();
@@ -186,7 +193,7 @@ struct Client::Impl {
     });
     reply_reader = Reader<msg::CommandReply>(*bus, topics::kCommandReply, [this](const msg::CommandReply& r, const SampleInfo&) {
       if (r.client().to_string() != options.name) return;
-      Update([&] { OnReply(r); });
+      Update(kFrame, [&] { OnReply(r); });
     });
     blueprint_reader = Reader<msg::BlueprintSet>(*bus, topics::kBlueprints, [this](const msg::BlueprintSet& s, const SampleInfo&) {
       Update([&] { declarations[s.service().to_string()] = s.blueprints(); });
@@ -199,11 +206,19 @@ struct Client::Impl {
     });
     ground_reader = Reader<msg::GroundState>(*bus, topics::kGroundState, [this](const msg::GroundState& g, const SampleInfo&) {
       auto p = std::make_shared<const msg::GroundState>(g);
-      Update([&] { OnGround(std::move(p)); });
+      Update(kFrame, [&] { OnGround(std::move(p)); });
     });
     air_reader = Reader<msg::AirState>(*bus, topics::kAirState, [this](const msg::AirState& a, const SampleInfo&) {
       auto p = std::make_shared<const msg::AirState>(a);
-      Update([&] { OnAir(std::move(p)); });
+      Update(kFrame, [&] { OnAir(std::move(p)); });
+    });
+    event_reader = Reader<msg::SimEvent>(*bus, topics::kEvent, [this](const msg::SimEvent& e, const SampleInfo&) {
+      if (e.kind() != msg::EventKind::EVENT_COMMAND_FAILED) return;
+      Update([&] {
+        auto& q = drone_failures[e.actor()];
+        q.push_back(e.message().to_string());
+        while (q.size() > 8) q.pop_front();
+      });
     });
     try {
       Connect();
@@ -217,6 +232,7 @@ struct Client::Impl {
 
   void Shutdown() {
     // Readers first, so no callback runs while the rest goes away.
+    event_reader = {};
     air_reader = {};
     ground_reader = {};
     tick_reader = {};
@@ -235,27 +251,38 @@ struct Client::Impl {
       std::lock_guard<std::mutex> lock(mu);
       stopping = true;
     }
-    cv.notify_all();
+    inbox_cv.notify_all();
     if (dispatcher.joinable()) dispatcher.join();
     if (commands && commands.MatchedReaders() > 0) commands.WaitForAcknowledgments(0.5);
   }
 
+  enum Wakes { kAny, kFrame };  // kFrame: a change a tick() may wait for
   template <class F>
   void Update(F&& f) {
+    Update(kAny, std::forward<F>(f));
+  }
+  template <class F>
+  void Update(Wakes wakes, F&& f) {
     {
       std::lock_guard<std::mutex> lock(mu);
       f();
     }
     cv.notify_all();
+    if (wakes == kFrame) frame_cv.notify_all();
   }
 
-  // Waits (mu held by `lock`) until pred or the deadline; false on timeout.
+  // Waits (mu held by `lock`) until pred or the deadline; false on timeout. `on` is cv,
+  // or frame_cv for a predicate over reply, FrameDone, state and delivery changes only.
   template <class P>
   bool WaitUntil(std::unique_lock<std::mutex>& lock, Clock::time_point deadline, P pred) {
+    return WaitOn(cv, lock, deadline, pred);
+  }
+  template <class P>
+  bool WaitOn(std::condition_variable& on, std::unique_lock<std::mutex>& lock, Clock::time_point deadline, P pred) {
     while (!pred()) {
       if (deadline == Clock::time_point::max()) {
-        cv.wait(lock);
-      } else if (cv.wait_until(lock, deadline) == std::cv_status::timeout) {
+        on.wait(lock);
+      } else if (on.wait_until(lock, deadline) == std::cv_status::timeout) {
         return pred();
       }
     }
@@ -446,7 +473,7 @@ struct Client::Impl {
 
   msg::CommandReply WaitReply(uint64_t seq, const char* what) {
     std::unique_lock<std::mutex> lock(mu);
-    if (!WaitUntil(lock, Deadline(options.timeout_s), [&] { return replies.count(seq) > 0; })) {
+    if (!WaitOn(frame_cv, lock, Deadline(options.timeout_s), [&] { return replies.count(seq) > 0; })) {
       throw ClientError(std::string(what) + ": no reply from the coordinator within " + Fmt(options.timeout_s) + " s");
     }
     msg::CommandReply r = replies.at(seq);
@@ -458,7 +485,7 @@ struct Client::Impl {
   void Dispatch() {
     std::unique_lock<std::mutex> lock(mu);
     while (true) {
-      cv.wait(lock, [&] { return stopping || !inbox.empty(); });
+      inbox_cv.wait(lock, [&] { return stopping || !inbox.empty(); });
       if (stopping) return;
       SensorSample s = std::move(inbox.front());
       inbox.pop_front();
@@ -481,6 +508,7 @@ struct Client::Impl {
         ++it->second.count;
       }
       cv.notify_all();
+      frame_cv.notify_all();
     }
   }
 
@@ -499,7 +527,7 @@ struct Client::Impl {
       s.message = std::move(message);
       inbox.push_back(std::move(s));
     }
-    cv.notify_all();
+    inbox_cv.notify_one();
   }
 
   // Large payloads: the received sample is taken, not copied.
@@ -554,7 +582,7 @@ struct Client::Impl {
     const bool has_ground = ground_reader.MatchedWriters() > 0 || MemberOfKind("ground_sim");
     const bool has_air = air_reader.MatchedWriters() > 0 || MemberOfKind("air_sim");
     const auto state_deadline = Deadline(options.state_timeout_s);
-    WaitUntil(lock, state_deadline, [&] {
+    WaitOn(frame_cv, lock, state_deadline, [&] {
       return (!has_ground || ground.count({run, k})) && (!has_air || air.count({run, k}));
     });
     const msg::PerceptionMode mode = world ? world->settings().perception_mode() : msg::PerceptionMode::PERCEPTION_STRICT;
@@ -569,7 +597,7 @@ struct Client::Impl {
       }
       return out;
     };
-    if (!WaitUntil(lock, Deadline(options.sensor_timeout_s), [&] { return late().empty(); })) {
+    if (!WaitOn(frame_cv, lock, Deadline(options.sensor_timeout_s), [&] { return late().empty(); })) {
       std::vector<uint32_t> ids = late();
       std::string list;
       for (uint32_t id : ids) {
@@ -670,7 +698,7 @@ uint64_t Client::tick() {
   const RunFrame want{r.run(), r.frame()};
   {
     std::unique_lock<std::mutex> lock(s.mu);
-    if (!s.WaitUntil(lock, Deadline(s.options.tick_timeout_s), [&] { return s.done >= want; })) {
+    if (!s.WaitOn(s.frame_cv, lock, Deadline(s.options.tick_timeout_s), [&] { return s.done >= want; })) {
       throw ClientError("tick(): frame " + std::to_string(r.frame()) + " did not complete within " + Fmt(s.options.tick_timeout_s) +
                         " s" + s.FaultReason());
     }
@@ -874,8 +902,11 @@ void Client::listen(uint32_t sensor, SensorCallback callback) {
 }
 
 void Client::stop(uint32_t sensor) {
-  std::unique_lock<std::mutex> lock(impl_->mu);
-  impl_->listeners.erase(sensor);
+  {
+    std::unique_lock<std::mutex> lock(impl_->mu);
+    impl_->listeners.erase(sensor);
+  }
+  impl_->frame_cv.notify_all();  // a tick() waiting for it waits no more
 }
 
 bool Client::is_listening(uint32_t sensor) const {
@@ -940,6 +971,31 @@ msg::DroneCommandStatus Client::wait_drone(uint32_t actor, uint64_t command_id, 
       throw ClientError("drone " + std::to_string(actor) + " is gone (destroyed, or a new run began)");
     }
   }
+}
+
+std::string Client::drone_failure(uint32_t actor, uint64_t command_id, double wait_s) const {
+  auto& s = *impl_;
+  const std::string id = std::to_string(command_id);
+  std::string found;
+  auto find = [&] {
+    auto it = s.drone_failures.find(actor);
+    if (it == s.drone_failures.end()) return false;
+    for (auto m = it->second.rbegin(); m != it->second.rend(); ++m) {
+      if (m->find("command " + id) != std::string::npos) {
+        found = *m;
+        return true;
+      }
+    }
+    return false;
+  };
+  std::unique_lock<std::mutex> lock(s.mu);
+  if (!s.WaitUntil(lock, Deadline(wait_s), find)) {
+    // A command refused before it ran (bad values) is reported without its id: the
+    // actor's latest failure is the one.
+    auto it = s.drone_failures.find(actor);
+    if (it != s.drone_failures.end() && !it->second.empty()) found = it->second.back();
+  }
+  return found;
 }
 
 const char* CommandKindName(msg::CommandKind kind) {

@@ -81,7 +81,16 @@ msg::DroneCommandStatus CommandFuture::status(double timeout_s) {
   return *done_;
 }
 
-bool CommandFuture::join(double timeout_s) { return status(timeout_s) == msg::DroneCommandStatus::DRONE_CMD_COMPLETED; }
+bool CommandFuture::join(double timeout_s) {
+  const msg::DroneCommandStatus s = status(timeout_s);
+  if (s == msg::DroneCommandStatus::DRONE_CMD_REJECTED) {
+    // As AirSim, whose join() raises the server's exception: the reason is air_sim's.
+    std::string why = client_->drone_failure(actor_, id_, 2.0);
+    if (why.empty()) why = "no reason received";
+    throw CommandRejected("drone " + std::to_string(actor_) + ": command rejected by air_sim: " + why, why);
+  }
+  return s == msg::DroneCommandStatus::DRONE_CMD_COMPLETED;
+}
 
 uint32_t MultirotorClient::Resolve(const std::string& vehicle_name) const {
   std::vector<ActorInfo> drones;

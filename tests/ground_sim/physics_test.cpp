@@ -156,5 +156,32 @@ TEST(GroundPhysics, SubsteppingFollowsCarlasSettings) {
   EXPECT_NE(fine.world->StateHash(), coarse.world->StateHash());
 }
 
+// A drone of air_sim (an external body, its pose of the previous frame) in the way of a
+// car: the car's collision event names the drone, with an impulse; the drone's own
+// event is air_sim's to publish.
+TEST(GroundPhysics, ACarHittingADroneReportsTheDrone) {
+  Car car(testing::StraightTown(), "vehicle.audi.tt", Vec3(0, -1.75, 0));
+  car.Drive(0.6);
+  ExternalBody drone;
+  drone.id = 900;
+  drone.kind = ObjectKind::kDrone;
+  drone.pose = Pose::FromYaw(Vec3(25, -1.75, 0.9), 0);  // hovering at bonnet height
+  drone.half_extents = Vec3(0.3, 0.3, 0.1);
+  bool hit = false;
+  for (int i = 0; i < 200 && !hit; ++i) {
+    car.world->SetExternalBodies({drone});
+    car.world->Step(kDt);
+    for (const auto& c : car.world->Collisions()) {
+      if (c.actor != car.id) continue;
+      EXPECT_EQ(c.other_actor, 900u);
+      EXPECT_EQ(c.other_kind, ObjectKind::kDrone);
+      EXPECT_GT(c.normal_impulse.norm(), 0.0);
+      hit = true;
+    }
+  }
+  EXPECT_TRUE(hit);
+  EXPECT_EQ(car.View().infractions.static_collisions, 1);  // a drone is not a vehicle or a walker
+}
+
 }  // namespace
 }  // namespace lockstep::ground

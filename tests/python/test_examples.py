@@ -60,3 +60,5 @@ def test_showcase(sim):
     assert all(summary['sensor_frames_in_order_once'].values())
     assert os.path.getsize(os.path.join(out_dir, 'town.png')) > 0
     assert len(open(os.path.join(out_dir, 'ticks.csv')).readlines()) == 41
+    assert summary['cars'] == 4 and summary['walkers'] >= 1
+    assert summary['drone_height_above_ego_m'] > 2.5, 'the drone did not take off to follow the ego'

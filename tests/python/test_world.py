@@ -173,6 +173,22 @@ def test_airsim_drone_flies_in_ned_from_its_spawn(world):
         drone.destroy()
 
 
+def test_a_rejected_drone_command_raises_air_sims_reason(world):
+    bp = world.get_blueprint_library().find('drone.generic_quad')
+    bp.set_attribute('role_name', 'falling')
+    drone = world.spawn_actor(bp, carla.Transform(carla.Location(43.25, -1.75, 3.0)))
+    world.tick()
+    world.tick()  # falling by now
+    try:
+        c = airsim.MultirotorClient()
+        c.enableApiControl(True, 'falling')
+        c.armDisarm(True, 'falling')
+        with pytest.raises(lockstep.CommandRejected, match='cannot take off while moving'):
+            c.takeoffAsync(vehicle_name='falling').join()
+    finally:
+        drone.destroy()
+
+
 def test_airsim_second_pass_calls(world):
     """moveToZ, moveByRollPitchYawrateZ, moveToGPS, simSetWind, simSetKinematics and the controller gains reach
     air_sim and move the drone the way AirSim's would."""

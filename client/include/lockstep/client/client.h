@@ -191,6 +191,9 @@ class Client {
   // cancelled, rejected) or replaced by a newer command; in synchronous mode it ticks
   // the world while it waits. Throws ClientError after timeout_s (< 0: none).
   msg::DroneCommandStatus wait_drone(uint32_t actor, uint64_t command_id, double timeout_s = -1);
+  // Why air_sim rejected a drone command (its EVENT_COMMAND_FAILED message), waiting up
+  // to wait_s for it; empty if none arrived.
+  std::string drone_failure(uint32_t actor, uint64_t command_id, double wait_s = 0) const;
 
  private:
   struct Impl;

@@ -70,7 +70,8 @@ class CommandFuture {
   CommandFuture() = default;
   CommandFuture(Client* client, uint32_t actor, uint64_t id) : client_(client), actor_(actor), id_(id) {}
   // Waits until air_sim reports the command finished (ticking in synchronous mode);
-  // returns true when it completed, false when it timed out, was cancelled or rejected.
+  // returns true when it completed, false when it timed out or was cancelled; throws
+  // CommandRejected with air_sim's reason when it was rejected (AirSim raises too).
   bool join(double timeout_s = -1);
   msg::DroneCommandStatus status(double timeout_s = -1);
   uint64_t command_id() const { return id_; }

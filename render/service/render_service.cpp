@@ -526,10 +526,8 @@ void RenderService::Step(const msg::Tick& tick) {
     bool joined = false;
     for (auto& pass : passes) {
       const auto& c = pass.camera;
-      if (c.width == view.width && c.height == view.height && c.fov_deg == view.fov_deg && c.pose.position == view.pose.position &&
-          c.pose.orientation.coeffs() == view.pose.orientation.coeffs() && c.gamma == view.gamma &&
-          c.exposure_compensation == view.exposure_compensation && c.lens_circle_multiplier == view.lens_circle_multiplier &&
-          c.lens_circle_falloff == view.lens_circle_falloff && c.post_process == view.post_process &&
+      if (render::SameLens(c, view) && c.pose.position == view.pose.position &&
+          c.pose.orientation.coeffs() == view.pose.orientation.coeffs() &&
           c.previous_pose.has_value() == view.previous_pose.has_value()) {
         pass.camera.outputs |= view.outputs;
         pass.members.push_back(cam.get());

@@ -72,6 +72,24 @@ Eigen::Matrix4f ProjectionMatrix(const Camera& cam) {
   return p.cast<float>();
 }
 
+bool Camera::HasLensDistortion() const { return lens_circle_multiplier > 0 && (lens_k != 0 || lens_kcube != 0); }
+
+bool SameLens(const Camera& a, const Camera& b) {
+  return a.width == b.width && a.height == b.height && a.fov_deg == b.fov_deg && a.gamma == b.gamma &&
+         a.exposure_compensation == b.exposure_compensation && a.lens_circle_multiplier == b.lens_circle_multiplier &&
+         a.lens_circle_falloff == b.lens_circle_falloff && a.lens_k == b.lens_k && a.lens_kcube == b.lens_kcube &&
+         a.lens_x_size == b.lens_x_size && a.lens_y_size == b.lens_y_size && a.post_process == b.post_process;
+}
+
+Eigen::Vector2d DistortedSource(const Camera& cam, double u, double v) {
+  const double half = cam.width / 2.0;
+  const double x = (u - half) / half, y = (v - cam.height / 2.0) / half;
+  const double xs = x * cam.lens_x_size, ys = y * cam.lens_y_size;
+  const double r2 = xs * xs + ys * ys;
+  const double f = 1 + cam.lens_circle_multiplier * r2 * (cam.lens_k + cam.lens_kcube * std::sqrt(r2));
+  return {half + x * f * half, cam.height / 2.0 + y * f * half};
+}
+
 double DecodeCarlaDepth(const std::uint8_t* bgra) {
   const double v = bgra[2] + bgra[1] * 256.0 + bgra[0] * 65536.0;
   return kFarPlane * v / (256.0 * 256.0 * 256.0 - 1.0);

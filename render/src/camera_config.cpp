@@ -20,7 +20,8 @@ AttributeSpec S(const std::string& id, const std::string& def, std::vector<std::
 
 std::vector<AttributeSpec> Basic() {
   return {S("role_name", "", {}), I("image_size_x", 800, 1, 3840), I("image_size_y", 600, 1, 2160), F("fov", 90, 1, 170),
-          F("sensor_tick", 0, 0, 3600), F("lens_circle_falloff", 5, 0, 10), F("lens_circle_multiplier", 0, 0, 10)};
+          F("sensor_tick", 0, 0, 3600), F("lens_circle_falloff", 5, 0, 10), F("lens_circle_multiplier", 0, 0, 10),
+          F("lens_k", -1, -100, 100), F("lens_kcube", 0, -100, 100), F("lens_x_size", 0.08, 0, 1), F("lens_y_size", 0.08, 0, 1)};
 }
 std::vector<AttributeSpec> Rgb() {
   auto v = Basic();
@@ -121,6 +122,10 @@ CameraSettings ParseCamera(const std::string& blueprint, const std::map<std::str
   s.sensor_tick = number("sensor_tick");
   s.camera.lens_circle_falloff = number("lens_circle_falloff");
   s.camera.lens_circle_multiplier = number("lens_circle_multiplier");
+  s.camera.lens_k = number("lens_k");
+  s.camera.lens_kcube = number("lens_kcube");
+  s.camera.lens_x_size = number("lens_x_size");
+  s.camera.lens_y_size = number("lens_y_size");
   if (Find(*bp, "gamma")) {
     s.camera.gamma = number("gamma");
     choice("exposure_mode");

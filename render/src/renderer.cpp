@@ -64,6 +64,12 @@ Eigen::Matrix4f RotorMatrix(const Vec3& hub, double angle) {
   return m.cast<float>();
 }
 
+// Blade angle of rotor r of a drawn actor (clockwise rotors turn the other way).
+double RotorAngle(const ActorDraw& a, const Model& m, std::size_t r) {
+  const double angle = r < a.rotor_angles.size() ? a.rotor_angles[r] : 0.0;
+  return m.rotors[r].clockwise ? -angle : angle;
+}
+
 struct Target {
   GLuint fbo = 0, depth = 0;
   GLuint tex[kOutputs] = {};
@@ -135,6 +141,10 @@ struct Renderer::Impl {
   } static_shadow;
   RenderStats stats;
   RenderTuning tuning;
+  // Lens distortion: per camera lens, the source pixel of every output pixel (-1: outside);
+  // the distorted outputs are gathered from the read-back into these buffers.
+  std::map<std::string, std::vector<std::int32_t>> remaps;
+  std::vector<std::uint8_t> lens_out[kOutputs];
 
   explicit Impl(DevicePreference pref) : context(pref) {
     Programs(0);  // labels only
@@ -402,11 +412,20 @@ struct Renderer::Impl {
       if (it == models.end()) continue;
       const Model& m = it->second.model;
       if (!fr.Visible(a.pose.position.cast<float>(), static_cast<float>(m.half_extents.norm()))) continue;
-      shadow.Set("u_model", ModelMatrix(a.pose));
+      const Eigen::Matrix4f model = ModelMatrix(a.pose);
+      shadow.Set("u_model", model);
       const GLsizei body = static_cast<GLsizei>(m.rotors.empty() ? m.vertices.size() : m.rotors.front().first);
       glDrawArrays(GL_TRIANGLES, it->second.first, body);
       stats.shadow_triangles += static_cast<std::uint64_t>(body) / 3;
       ++stats.draw_calls;
+      // Rotor blades cast their shadows at the angle they are drawn.
+      for (std::size_t r = 0; r < m.rotors.size(); ++r) {
+        const auto& rotor = m.rotors[r];
+        shadow.Set("u_model", (model * RotorMatrix(rotor.hub, RotorAngle(a, m, r))).eval());
+        glDrawArrays(GL_TRIANGLES, it->second.first + static_cast<GLint>(rotor.first), static_cast<GLsizei>(rotor.count));
+        stats.shadow_triangles += rotor.count / 3;
+        ++stats.draw_calls;
+      }
     }
     return vp;
   }
@@ -561,10 +580,9 @@ struct Renderer::Impl {
       stats.triangles += static_cast<std::uint64_t>(body) / 3;
       ++stats.draw_calls;
       for (std::size_t r = 0; r < m.rotors.size(); ++r) {
-        const double angle = r < a.rotor_angles.size() ? a.rotor_angles[r] : 0.0;
         const auto& rotor = m.rotors[r];
-        scene.Set("u_model", (model * RotorMatrix(rotor.hub, rotor.clockwise ? -angle : angle)).eval());
-        scene.Set("u_prev_model", (prev * RotorMatrix(rotor.hub, rotor.clockwise ? -angle : angle)).eval());
+        scene.Set("u_model", (model * RotorMatrix(rotor.hub, RotorAngle(a, m, r))).eval());
+        scene.Set("u_prev_model", (prev * RotorMatrix(rotor.hub, RotorAngle(a, m, r))).eval());
         glDrawArrays(GL_TRIANGLES, it->second.first + static_cast<GLint>(rotor.first), static_cast<GLsizei>(rotor.count));
         stats.triangles += rotor.count / 3;
         ++stats.draw_calls;
@@ -586,6 +604,46 @@ struct Renderer::Impl {
       ++stats.draw_calls;
     }
     scene.SetInt("u_light_state", 3);
+  }
+
+  const std::vector<std::int32_t>& Remap(const Camera& cam) {
+    char key[256];
+    std::snprintf(key, sizeof key, "%dx%d %.17g %.17g %.17g %.17g %.17g", cam.width, cam.height, cam.lens_circle_multiplier, cam.lens_k,
+                  cam.lens_kcube, cam.lens_x_size, cam.lens_y_size);
+    auto [it, fresh] = remaps.try_emplace(key);
+    if (!fresh) return it->second;
+    if (remaps.size() > 16) {  // lenses that change every frame: keep memory bounded
+      remaps.clear();
+      it = remaps.try_emplace(key).first;
+    }
+    auto& table = it->second;
+    table.resize(static_cast<std::size_t>(cam.width) * cam.height);
+    for (int v = 0; v < cam.height; ++v) {
+      for (int u = 0; u < cam.width; ++u) {
+        const Eigen::Vector2d s = DistortedSource(cam, u + 0.5, v + 0.5);
+        const int su = static_cast<int>(std::floor(s.x())), sv = static_cast<int>(std::floor(s.y()));
+        table[static_cast<std::size_t>(v) * cam.width + u] =
+            su < 0 || sv < 0 || su >= cam.width || sv >= cam.height ? -1 : sv * cam.width + su;
+      }
+    }
+    return table;
+  }
+
+  // Replaces the mapped outputs by their distorted images (nearest pixel; outside: zero).
+  void Distort(const Camera& cam, const void* mapped[kOutputs]) {
+    const auto& table = Remap(cam);
+    for (int i = 0; i < kOutputs; ++i) {
+      if (!mapped[i]) continue;
+      const std::size_t b = static_cast<std::size_t>(kFormats[i].bytes);
+      auto& out = lens_out[i];
+      out.resize(table.size() * b);
+      const auto* src = static_cast<const std::uint8_t*>(mapped[i]);
+      for (std::size_t p = 0; p < table.size(); ++p) {
+        if (table[p] < 0) std::memset(&out[p * b], 0, b);
+        else std::memcpy(&out[p * b], src + static_cast<std::size_t>(table[p]) * b, b);
+      }
+      mapped[i] = out.data();
+    }
   }
 
   void StartReadback(const Camera& cam, int slot) {
@@ -622,6 +680,7 @@ struct Renderer::Impl {
                                    GL_MAP_READ_BIT);
       if (!mapped[i]) throw std::runtime_error("render: mapping a read-back buffer failed");
     }
+    if (cam.HasLensDistortion()) Distort(cam, mapped);
     im.color = static_cast<const std::uint8_t*>(mapped[0]);
     im.labels = static_cast<const std::uint8_t*>(mapped[1]);
     im.depth = static_cast<const float*>(mapped[2]);

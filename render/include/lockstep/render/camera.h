@@ -26,12 +26,31 @@ struct Camera {
   double exposure_compensation = 0.0;  // EV: colour scaled by 2^ev
   double gamma = 2.2;
   double lens_circle_falloff = 5.0;
-  double lens_circle_multiplier = 0.0;  // 0: no vignetting (CARLA's default)
+  double lens_circle_multiplier = 0.0;  // 0: no vignetting and no distortion (CARLA's default)
+  // Lens distortion (CARLA's attributes and defaults), a cubic model scaled by
+  // lens_circle_multiplier: CARLA's defaults give undistorted images. See DistortedSource.
+  double lens_k = -1.0;
+  double lens_kcube = 0.0;
+  double lens_x_size = 0.08;
+  double lens_y_size = 0.08;
   bool post_process = true;             // weather effects on the colour (rain streaks)
   std::uint64_t noise_seed = 0;         // seeds rain streaks: run seed ^ sensor id
 
   double Focal() const;  // px
+  bool HasLensDistortion() const;  // lens_circle_multiplier > 0 and lens_k or lens_kcube not 0
 };
+
+// True if two cameras at one pose give the same images from one pass: same size, field of
+// view, lens and exposure.
+bool SameLens(const Camera& a, const Camera& b);
+
+// Lens distortion: the output pixel (u, v) (continuous, pixel centres at +0.5) shows what
+// the pinhole image shows at the returned position. With x = (u - W/2) / (W/2) and
+// y = (v - H/2) / (W/2), r^2 = (x lens_x_size)^2 + (y lens_y_size)^2 and
+// f = 1 + lens_circle_multiplier r^2 (lens_k + lens_kcube r), the source is (x f, y f)
+// (the cubic model of Syntheyes that CARLA's lens shader follows): lens_k < 0 stretches
+// the edges outwards, lens_k > 0 draws them in and the corners read outside the image.
+Eigen::Vector2d DistortedSource(const Camera& cam, double u, double v);
 
 // Pixel position (continuous) of a world point; nullopt behind the camera. depth: planar m.
 std::optional<Eigen::Vector2d> Project(const Camera& cam, const Vec3& world, double* depth = nullptr);

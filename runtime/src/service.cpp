@@ -224,12 +224,16 @@ struct ServiceRunner::Impl {
       // had a member of our name) has no log to wait for: it joins without the past.
       std::optional<msg::TickLog> log = replacing ? WaitTickLog(current->frame() - 1, stop) : std::nullopt;
       // Take over after the last completed frame: the open tick, or the one after the log's.
-      const uint64_t to = log ? std::max<uint64_t>(log->frames(), current->frame() - 1) : current->frame() - 1;
+      uint64_t to = log ? std::max<uint64_t>(log->frames(), current->frame() - 1) : current->frame() - 1;
+      // The process we replace may have stepped the open tick and sent its snapshot before
+      // it died (the coordinator then holds that one): the state after the open tick is
+      // as good, and the re-sent tick is then acked without stepping it again.
+      const uint64_t newest_usable = std::max(to, current->frame());
       {
         // A log that forgot ticks needs a snapshot at least as new: wait for its copy.
         std::unique_lock<std::mutex> lock(mu);
         auto usable = [&] {
-          return snapshot && snapshot->run() == run && snapshot->frame() <= to &&
+          return snapshot && snapshot->run() == run && snapshot->frame() <= newest_usable &&
                  (!log || snapshot->frame() >= log->first_frame());
         };
         if (log && log->first_frame() > 0) cv.wait_for(lock, std::chrono::seconds(5), [&] { return stop || usable(); });
@@ -242,7 +246,9 @@ struct ServiceRunner::Impl {
         snapshot_frame = published_snapshot = restored;
         spdlog::info("restored the snapshot of frame {}", restored);
       }
-      if (log && log->first_frame() <= restored) {
+      if (restored > to) {
+        to = restored;  // the open tick's own snapshot: nothing to replay
+      } else if (log && log->first_frame() <= restored) {
         restored = Replay(*log, restored, to);
       } else if (log) {
         Diverge("the tick log starts after frame " + std::to_string(log->first_frame()) + " and no snapshot of frame " +
@@ -263,15 +269,16 @@ struct ServiceRunner::Impl {
     joined = true;
   }
 
-  // True when the run had a member of our name before us, so the coordinator publishes a
-  // tick log for us once it notices that member failed: another pid, frames acked in
-  // this run, or a failure. Our own STARTING announcement shows our pid and nothing else.
-  // With no status at hand, assume so (waiting for a log is the safe side). Call with mu held.
+  // True unless the run status shows we are a newcomer: frames were done in this run while
+  // no member of our name took part (none listed, or listed with no acked frame, no
+  // failure, and no pid but ours: our own STARTING announcement). Only then the
+  // coordinator publishes no tick log for us. A status from before any frame cannot tell:
+  // then assume a predecessor (waiting for a log is the safe side). Call with mu held.
   bool Predecessor() const {
-    if (!status || status->run() != run) return true;
+    if (!status || status->run() != run || status->frame() == 0) return true;
     for (const auto& m : status->members()) {
       if (m.service().to_string() != options.name) continue;
-      return (m.pid() != 0 && m.pid() != static_cast<int32_t>(getpid())) || m.last_frame() > 0 || !m.failure().to_string().empty();
+      return m.last_frame() > 0 || !m.failure().to_string().empty() || (m.pid() != 0 && m.pid() != static_cast<int32_t>(getpid()));
     }
     return false;
   }

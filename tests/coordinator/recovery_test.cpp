@@ -206,7 +206,7 @@ TEST_F(Recovery, ASnapshotBoundsTheTickLogAndTheReplacementReplaysOnlyFromIt) {
   auto& b = Start("b", std::make_unique<NoopCore>(), 20);
   ASSERT_TRUE(WaitState(msg::RunState::RUN_RUNNING));
   // A client that sends a command every few frames, as a controller would.
-  for (int i = 0; i < 2000 && obs_.last_frame() <= 60; ++i) {
+  for (int i = 0; i < 4000 && obs_.last_frame() <= 120; ++i) {
     msg::WeatherParameters w;
     w.cloudiness(static_cast<float>(i % 100));
     w.fog_distance(0.75f);
@@ -217,7 +217,7 @@ TEST_F(Recovery, ASnapshotBoundsTheTickLogAndTheReplacementReplaysOnlyFromIt) {
     ASSERT_TRUE(r && r->accepted()) << (r ? r->reason().to_string() : "no reply");
   }
   const uint64_t sent_until = obs_.last_frame();
-  ASSERT_GT(sent_until, 40u);
+  ASSERT_GT(sent_until, 100u);
   b.Stop();
   ASSERT_TRUE(obs_.WaitUntil([&] { return logs.Of("b").has_value(); }, 10s));
   const msg::TickLog log = *logs.Of("b");
@@ -225,7 +225,11 @@ TEST_F(Recovery, ASnapshotBoundsTheTickLogAndTheReplacementReplaysOnlyFromIt) {
   ASSERT_FALSE(log.ticks().empty());
   EXPECT_EQ(log.ticks().front().frame(), log.first_frame() + 1);
   EXPECT_LE(log.ticks().size(), log.frames() - log.first_frame());
-  EXPECT_LE(log.frames() - log.first_frame(), 2 * 20u) << "a replacement replays at most about one snapshot period";
+  // The log starts at the newest snapshot the coordinator holds a copy of when it trims
+  // (two periods back at most once the copy is in), so a replacement replays about one
+  // period. The copy travels on its own topic and may arrive a few frames after the acks
+  // on a loaded machine: one period of slack for it.
+  EXPECT_LE(log.frames() - log.first_frame(), 3 * 20u) << "a replacement replays at most about one snapshot period";
   Start("b", std::make_unique<NoopCore>(), 20);  // restores the coordinator's copy of b's snapshot, replays the rest
   ASSERT_TRUE(WaitState(msg::RunState::RUN_RUNNING));
   const uint64_t resumed = obs_.last_frame();

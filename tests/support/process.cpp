@@ -30,6 +30,9 @@ int TestDomain() { return LockFreeDdsDomain(); }
 static std::string TempDir() {
   static const std::string dir = [] {
     auto d = std::filesystem::temp_directory_path() / ("lockstep-test-" + std::to_string(getpid()));
+    // An earlier test process with the same pid may have left its files here: a child's
+    // log read before the child truncated it showed that process's output.
+    std::filesystem::remove_all(d);
     std::filesystem::create_directories(d);
     return d.string();
   }();
@@ -45,6 +48,7 @@ std::string WriteTempFile(const std::string& name, const std::string& text) {
 Process::Process(std::vector<std::string> argv, const std::map<std::string, std::string>& env) {
   static std::atomic<int> counter{0};
   log_ = TempDir() + "/proc-" + std::to_string(counter++) + ".log";
+  std::ofstream(log_, std::ios::trunc);  // empty before the child runs: Output() never shows a stale file
   pid_ = fork();
   if (pid_ < 0) throw std::runtime_error("fork failed");
   if (pid_ == 0) {

@@ -122,7 +122,8 @@ msg::DroneCommandKind DroneKind(YamlMap& m, const std::string& name) {
 }
 
 // One scenario step: {frame, spawn, as, at, yaw, attributes, parent}, {frame, actor, drone, ...},
-// {frame, actor, autopilot: true|false} (Traffic Manager) or {frame, actor, walker_ai: start|stop}.
+// {frame, actor, autopilot: true|false} (Traffic Manager), {frame, actor, walker_ai: start|stop}
+// or {frame, weather: {wind_intensity: 30, ...}} (CARLA's set_weather).
 ScheduledCommand LoadStep(YamlMap m, uint64_t index) {
   ScheduledCommand s;
   s.command.client("scenario");
@@ -190,8 +191,30 @@ ScheduledCommand LoadStep(YamlMap m, uint64_t index) {
     }
     d.yaw(y);
     body.drone(d);
+  } else if (m.Child("weather")) {
+    // CARLA's set_weather: every parameter, CARLA's WeatherParameters() defaults for those not named.
+    YamlMap w = m.Map("weather");
+    msg::WeatherParameters p;
+    float v = 0;
+    p.rayleigh_scattering_scale(0.0331f);
+    if (w.Get("cloudiness", &v)) p.cloudiness(v);
+    if (w.Get("precipitation", &v)) p.precipitation(v);
+    if (w.Get("precipitation_deposits", &v)) p.precipitation_deposits(v);
+    if (w.Get("wind_intensity", &v)) p.wind_intensity(v);
+    if (w.Get("sun_azimuth_angle", &v)) p.sun_azimuth_angle(v);
+    if (w.Get("sun_altitude_angle", &v)) p.sun_altitude_angle(v);
+    if (w.Get("fog_density", &v)) p.fog_density(v);
+    if (w.Get("fog_distance", &v)) p.fog_distance(v);
+    if (w.Get("fog_falloff", &v)) p.fog_falloff(v);
+    if (w.Get("wetness", &v)) p.wetness(v);
+    if (w.Get("scattering_intensity", &v)) p.scattering_intensity(v);
+    if (w.Get("mie_scattering_scale", &v)) p.mie_scattering_scale(v);
+    if (w.Get("rayleigh_scattering_scale", &v)) p.rayleigh_scattering_scale(v);
+    if (w.Get("dust_storm", &v)) p.dust_storm(v);
+    w.Finish();
+    body.weather(p);
   } else {
-    m.Fail(m.Child("frame"), "spawn", "or 'drone', 'autopilot', 'walker_ai' is required in a scenario step");
+    m.Fail(m.Child("frame"), "spawn", "or 'drone', 'autopilot', 'walker_ai', 'weather' is required in a scenario step");
   }
   s.command.body(body);
   m.Finish();

@@ -48,6 +48,19 @@ TEST(LaunchConfig, UnknownKeyIsNamedWithItsLine) {
   EXPECT_NE(e.find("unknown key 'world.fixed_delta_second'"), std::string::npos) << e;
 }
 
+TEST(LaunchConfig, AWeatherStepIsCarlasSetWeatherWithItsDefaults) {
+  auto c = ParseLaunchConfig("scenario:\n  - {frame: 4, weather: {wind_intensity: 40, fog_density: 10}}\n", "test.yaml");
+  ASSERT_EQ(c.scenario.size(), 1u);
+  EXPECT_EQ(c.scenario[0].frame, 4u);
+  const auto& w = c.scenario[0].command.body().weather();
+  EXPECT_FLOAT_EQ(w.wind_intensity(), 40);
+  EXPECT_FLOAT_EQ(w.fog_density(), 10);
+  EXPECT_FLOAT_EQ(w.cloudiness(), 0);
+  EXPECT_FLOAT_EQ(w.rayleigh_scattering_scale(), 0.0331f) << "CARLA's WeatherParameters() default";
+  const std::string e = ErrorOf("scenario:\n  - {frame: 4, weather: {windy: 40}}\n");
+  EXPECT_NE(e.find("unknown key 'scenario[0].weather.windy'"), std::string::npos) << e;
+}
+
 TEST(LaunchConfig, WrongTypeIsNamedWithItsLine) {
   const std::string e = ErrorOf("seed: 1\nticks: many\n");
   EXPECT_NE(e.find("test.yaml:2"), std::string::npos) << e;

@@ -149,12 +149,32 @@ TEST_F(RenderServiceTest, TwoRenderProcessesShowTheFrameOfThePhysicsState) {
     }
     return true;
   }, 30s)) << "image writers never matched";
+  // Our readers see the writers, but a writer may not see our reader yet (discovery goes
+  // both ways): tick one frame at a time until one frame's images arrive from every camera.
+  auto has_images_of = [&](uint64_t f) {
+    std::lock_guard<std::mutex> lock(mu_);
+    std::set<uint32_t> from;
+    for (const auto& im : images_)
+      if (im.frame == f) from.insert(im.sensor);
+    return from.size() == 3;
+  };
+  // (Frame 1's images may come from the writers' history on matching, so tick at least once.)
+  uint64_t warm = 1;
+  for (int i = 0; i < 30 && (warm == 1 || !has_images_of(warm)); ++i) {
+    t.count(1);
+    tb.tick_request(t);
+    auto r = Send(tb);
+    ASSERT_TRUE(r.accepted());
+    warm = r.frame();
+    observer_->WaitUntil([&] { return has_images_of(warm); }, 2s);
+  }
+  ASSERT_TRUE(has_images_of(warm)) << "no frame's images came from every camera";
   t.count(20);
   tb.tick_request(t);
   auto reply = Send(tb);
   ASSERT_TRUE(reply.accepted());
   const uint64_t last = reply.frame();
-  const uint64_t first = 2;
+  const uint64_t first = warm + 1;
   auto complete = [&] {
     std::lock_guard<std::mutex> lock(mu_);
     std::set<std::pair<uint32_t, uint64_t>> got;
@@ -166,7 +186,21 @@ TEST_F(RenderServiceTest, TwoRenderProcessesShowTheFrameOfThePhysicsState) {
     }
     return true;
   };
-  ASSERT_TRUE(observer_->WaitUntil(complete, 90s)) << "images of frames " << first << ".." << last << " missing";
+  auto what_came = [&] {
+    std::lock_guard<std::mutex> lock(mu_);
+    std::map<uint32_t, std::set<uint64_t>> frames;
+    for (const auto& im : images_) frames[im.sensor].insert(im.frame);
+    std::ostringstream out;
+    out << "air states of frames";
+    for (const auto& [f, s] : air_) out << ' ' << f;
+    for (const auto& [sensor, fs] : frames) {
+      out << "; camera " << sensor << ':';
+      for (auto f : fs) out << ' ' << f;
+    }
+    out << "; last frame done " << observer_->last_frame();
+    return out.str();
+  };
+  ASSERT_TRUE(observer_->WaitUntil(complete, 90s)) << "images of frames " << first << ".." << last << " missing: " << what_came();
   std::lock_guard<std::mutex> lock(mu_);
   std::map<std::pair<uint32_t, uint64_t>, int> count;
   double climbed = 0;

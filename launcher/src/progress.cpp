@@ -130,7 +130,7 @@ std::string FormatSummary(const Summary& s) {
     }
     out += Printf("outputs  %s: %llu file(s), %s\n", s.output_dir.c_str(), static_cast<unsigned long long>(files), Bytes(bytes).c_str());
     for (const auto& g : s.outputs)
-      out += Printf("  %-40s %8llu file(s) %12s\n", g.path.c_str(), static_cast<unsigned long long>(g.files), Bytes(g.bytes).c_str());
+      out += Printf("  %-48s %8llu file(s) %12s\n", g.path.c_str(), static_cast<unsigned long long>(g.files), Bytes(g.bytes).c_str());
   }
   for (const auto& [file, text] : s.service_summaries) {
     out += "-- ";

@@ -167,6 +167,25 @@ TEST(Membership, TimeTheCoordinatorItselfDidNotRunIsNotSilence) {
   EXPECT_EQ(FirstDeath(m, t0, 1200ms, 3s), std::optional<Clock::duration>(1600ms)) << "then 600 ms of real silence";
 }
 
+// Issue 7, 2.3: a frame acked again with another state (a replacement that did not rebuild
+// what the failed process had) is a divergence, reported once; a re-ack with the same state
+// is not.
+TEST(Membership, AFrameAckedAgainWithAnotherStateIsADivergence) {
+  Membership m({"air"}, 600ms);
+  m.OnAnnounce(Announce("air", msg::ServiceState::SERVICE_READY, 10), Clock::now());
+  m.OnAck("air", 1, AckOf(1, 7, 0xaaa));
+  EXPECT_FALSE(m.OnAck("air", 1, AckOf(1, 7, 0xaaa))) << "the same state again";
+  EXPECT_TRUE(m.Find("air")->divergence.empty());
+  EXPECT_TRUE(m.OnAck("air", 1, AckOf(1, 7, 0xbbb)));
+  EXPECT_NE(m.Find("air")->divergence.find("frame 7 acknowledged with state hash 0000000000000bbb after 0000000000000aaa"),
+            std::string::npos)
+      << m.Find("air")->divergence;
+  EXPECT_FALSE(m.OnAck("air", 1, AckOf(1, 8, 0xccc))) << "reported once";
+  m.NewRun(2);
+  m.OnAck("air", 2, AckOf(2, 7, 0xddd));
+  EXPECT_TRUE(m.Find("air")->divergence.empty()) << "a new run starts clean";
+}
+
 TEST(Membership, AStalledServiceNeedsToFinishTheFrameNotJustHeartbeat) {
   Membership m({"render"}, 600ms);
   const auto t0 = Clock::now();

@@ -9,6 +9,7 @@
 #include "lockstep/runtime/messages.h"
 #include "observer.h"
 #include "process.h"
+#include "replacement.h"
 
 namespace lockstep::testing {
 namespace {
@@ -35,23 +36,10 @@ std::string GroundConfig(int domain) {
 
 uint64_t FinalWorldHash(bool kill_midway, std::string* replacement_log) {
   const std::string config = WriteTempFile(kill_midway ? "ground-kill.yaml" : "ground-ref.yaml", GroundConfig(TestDomain()));
-  Process coordinator({Bin("lockstep_coordinator"), config});
-  auto ground = std::make_unique<Process>(std::vector<std::string>{Bin("lockstep_ground_sim"), "--name", "ground_sim", "--config", config});
-  auto bus = CreateDdsBus({TestDomain(), "", "lockstep.participant.loopback", "ground-replacement-test"});
-  Observer obs(*bus);
-  std::unique_ptr<Process> replacement;
-  if (kill_midway) {
-    EXPECT_TRUE(obs.WaitUntil([&] { return obs.last_frame() >= 120; }, 60s)) << coordinator.Output();
-    ground->Signal(SIGKILL);
-    EXPECT_TRUE(obs.WaitUntil([&] { return obs.status() && obs.status()->state() == msg::RunState::RUN_FAULTED; }, 10s));
-    replacement =
-        std::make_unique<Process>(std::vector<std::string>{Bin("lockstep_ground_sim"), "--name", "ground_sim", "--config", config});
-  }
-  EXPECT_TRUE(obs.WaitUntil([&] { return obs.frames().count(300) > 0; }, 90s)) << coordinator.Output();
-  EXPECT_TRUE(coordinator.Wait(10s).has_value());
-  if (replacement) *replacement_log = replacement->Output();
-  auto frames = obs.frames();
-  return frames.count(300) ? frames.at(300).world_hash() : 0;
+  const ReplacementRun run = RunWithReplacement(config, "lockstep_ground_sim", "ground_sim", kill_midway ? 120 : 0, 300);
+  EXPECT_TRUE(run.error.empty()) << run.error;
+  if (kill_midway) *replacement_log = run.replacement_log;
+  return run.world_hash;
 }
 
 TEST(GroundReplacement, ReplayRestoresTheRunBitForBit) {

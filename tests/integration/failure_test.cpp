@@ -13,6 +13,7 @@
 #include "lockstep/runtime/messages.h"
 #include "observer.h"
 #include "process.h"
+#include "replacement.h"
 
 namespace lockstep::testing {
 namespace {
@@ -166,22 +167,10 @@ std::string AirConfig(int domain) {
 
 uint64_t FinalWorldHash(bool kill_midway, std::string* replacement_log) {
   const std::string config = WriteTempFile(kill_midway ? "air-kill.yaml" : "air-ref.yaml", AirConfig(TestDomain()));
-  Process coordinator({Bin("lockstep_coordinator"), config});
-  auto air = std::make_unique<Process>(std::vector<std::string>{Bin("lockstep_air_sim"), "--name", "air_sim", "--config", config});
-  auto bus = CreateDdsBus({TestDomain(), "", "lockstep.participant.loopback", "air-replacement-test"});
-  Observer obs(*bus);
-  std::unique_ptr<Process> replacement;
-  if (kill_midway) {
-    EXPECT_TRUE(obs.WaitUntil([&] { return obs.last_frame() >= 120; }, 30s)) << coordinator.Output();
-    air->Signal(SIGKILL);
-    EXPECT_TRUE(obs.WaitUntil([&] { return obs.status() && obs.status()->state() == msg::RunState::RUN_FAULTED; }, 5s));
-    replacement = std::make_unique<Process>(std::vector<std::string>{Bin("lockstep_air_sim"), "--name", "air_sim", "--config", config});
-  }
-  EXPECT_TRUE(obs.WaitUntil([&] { return obs.frames().count(300) > 0; }, 60s)) << coordinator.Output();
-  EXPECT_TRUE(coordinator.Wait(10s).has_value());
-  if (replacement) *replacement_log = replacement->Output();
-  auto frames = obs.frames();
-  return frames.count(300) ? frames.at(300).world_hash() : 0;
+  const ReplacementRun run = RunWithReplacement(config, "lockstep_air_sim", "air_sim", kill_midway ? 120 : 0, 300);
+  EXPECT_TRUE(run.error.empty()) << run.error;
+  if (kill_midway) *replacement_log = run.replacement_log;
+  return run.world_hash;
 }
 
 TEST(AirReplacement, ReplayRestoresTheRunBitForBit) {

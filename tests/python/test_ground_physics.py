@@ -232,6 +232,11 @@ def test_traffic_lights_through_landmarks(world):
     assert tl in found
     landmark = next(l for l in before.get_landmarks(20.0) if l.id == tl.get_opendrive_id())
     assert world.get_traffic_light(landmark) == tl
+    # CARLA's agents find where a light acts from its trigger volume (the light's frame).
+    area = tl.get_transform().transform(tl.trigger_volume.location)
+    assert min(area.distance(w.transform.location) for w in stops) < tl.trigger_volume.extent.length() + 1.0
+    affected = tl.get_affected_lane_waypoints()
+    assert affected and all(isinstance(w, carla.Waypoint) for w in affected)
     j = stops[0].next(3.0)[0].get_junction()
     if j is not None:
         assert tl in world.get_traffic_lights_in_junction(j.id)

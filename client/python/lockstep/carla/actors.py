@@ -429,6 +429,31 @@ class TrafficLight(Actor):
         """One waypoint per controlled lane, at its stop line (from the map's signal)."""
         return self._world.get_map()._stop_waypoints(self.get_opendrive_id())
 
+    def get_affected_lane_waypoints(self):
+        """CARLA's: for every landmark of this light's signal (the signal and its
+        references), a waypoint at the landmark's s on each lane its validities name."""
+        m = self._world.get_map()
+        out = []
+        for l in m.get_all_landmarks_from_id(self.get_opendrive_id()):
+            for a, b in l.get_lane_validities():
+                step = 1 if a <= b else -1
+                for lane in range(a, b + step, step):
+                    w = m.get_waypoint_xodr(l.road_id, lane, l.s) if lane != 0 else None
+                    if w is not None:
+                        out.append(w)
+        return out
+
+    @property
+    def trigger_volume(self):
+        """carla.TrafficSign.trigger_volume: where an approaching vehicle reacts (3 m of
+        the controlled lanes before the stop line), in the light's frame, as CARLA."""
+        box = self._world.get_map()._trigger_volume(self.get_opendrive_id())
+        if box is None:
+            return BoundingBox()
+        (x, y, z), extent, _ = box
+        local = self.get_transform().inverse_transform(Location(x, -y, z))
+        return BoundingBox(Location(local.x, local.y, local.z), Vector3D(*extent))
+
     def reset_group(self):
         unsupported('TrafficLight.reset_group', 'no group reset command on the wire')
 

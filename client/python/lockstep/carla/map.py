@@ -383,6 +383,12 @@ class Map:
         d = self._native.junction_by_index(index)
         return _xodr_id(d['id']) if d is not None else None
 
+    def _trigger_volume(self, signal_id):
+        for i in self._native.traffic_light_infos():
+            if i['signal_id'] == signal_id:
+                return i['trigger_volume']
+        return None
+
     def _stop_waypoints(self, signal_id):
         for i in self._native.traffic_light_infos():
             if i['signal_id'] == signal_id:

@@ -28,6 +28,7 @@ def main():
     traffic_manager = client.get_trafficmanager(args.tm_port)
     traffic_manager.set_global_distance_to_leading_vehicle(2.5)
     traffic_manager.set_random_device_seed(args.seed)
+    world.set_pedestrians_seed(args.seed)  # as generate_traffic's --seedw
     settings = world.get_settings()
     traffic_manager.set_synchronous_mode(True)
     settings.synchronous_mode = True
@@ -70,6 +71,7 @@ def main():
                 print('walker controller: %s' % response.error)
             else:
                 controllers_list.append(response.actor_id)
+        world.set_pedestrians_cross_factor(0.0)  # generate_traffic's percentagePedestriansCrossing
         world.tick()
         for controller in world.get_actors(controllers_list):
             controller.start()

@@ -188,6 +188,7 @@ std::string CommandProcessor::Check(const msg::Command& cmd, bool synchronous) c
       return CheckDrone(b.drone());
     case CommandKind::CMD_TRAFFIC_LIGHT: {
       const auto& t = b.traffic_light();
+      if (t.action() == msg::TrafficLightAction::LIGHT_RESET_ALL) return {};
       return First(CheckActor(t.actor(), msg::ACTOR_TRAFFIC_LIGHT), InRange("green_time", t.green_time(), -1, 3600),
                    InRange("yellow_time", t.yellow_time(), -1, 3600), InRange("red_time", t.red_time(), -1, 3600));
     }
@@ -277,6 +278,8 @@ std::string CommandProcessor::Check(const msg::Command& cmd, bool synchronous) c
       if (!actors_.count(b.walker_ai().actor())) return "unknown actor " + std::to_string(b.walker_ai().actor());
       return First(Finite(b.walker_ai().location()) ? std::string() : "go_to_location has a NaN or infinite value",
                    InRange("max_speed", b.walker_ai().max_speed(), 0, 10));
+    case CommandKind::CMD_PEDESTRIANS:
+      return InRange("pedestrians cross factor", b.pedestrians().cross_factor(), 0, 1);
   }
   return "unknown command kind";
 }

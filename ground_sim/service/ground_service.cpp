@@ -230,10 +230,21 @@ void GroundService::Apply(const msg::Command& c) {
     }
     case msg::CommandKind::CMD_TRAFFIC_LIGHT: {
       const auto& t = b.traffic_light();
+      if (t.action() == msg::TrafficLightAction::LIGHT_RESET_ALL) {
+        world_->ResetAllLights();
+        return;
+      }
+      if (t.action() == msg::TrafficLightAction::LIGHT_RESET_GROUP) {
+        report(t.actor(), world_->ResetLightGroup(t.actor()));
+        return;
+      }
       report(t.actor(), world_->SetTrafficLight(t.actor(), ground_wire::FromWire(t.state()), t.green_time(), t.yellow_time(),
                                                 t.red_time(), t.freeze()));
       return;
     }
+    case msg::CommandKind::CMD_PEDESTRIANS:
+      report(0, world_->SetPedestriansCrossFactor(b.pedestrians().cross_factor()));
+      return;
     case msg::CommandKind::CMD_TRAFFIC_MANAGER: {
       const auto& t = b.traffic_manager();
       using P = msg::TrafficManagerParameter;

@@ -210,6 +210,7 @@ struct World::Impl {
   // traffic_lights.cpp
   void InitLights();
   void StepLights(double dt);
+  void ResetLightGroup(size_t group);
 
   // traffic_manager.cpp
   void StepTrafficManager(double dt);

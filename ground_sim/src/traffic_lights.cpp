@@ -14,9 +14,20 @@ void World::Impl::InitLights() {
   }
   group_current.assign(group_lights.size(), 0);
   group_all_red.assign(group_lights.size(), false);
-  for (const auto& g : group_lights) {
-    if (!g.empty()) lights[static_cast<size_t>(g.front())].color = LightColor::kGreen;
+  for (size_t g = 0; g < group_lights.size(); ++g) ResetLightGroup(g);
+}
+
+// CARLA's ATrafficLightGroup::ResetGroup: every controller back to its last stage (red),
+// then the first controller starts its cycle (green).
+void World::Impl::ResetLightGroup(size_t g) {
+  const auto& members = group_lights[g];
+  for (int i : members) {
+    lights[static_cast<size_t>(i)].color = LightColor::kRed;
+    lights[static_cast<size_t>(i)].elapsed = 0;
   }
+  group_current[g] = 0;
+  group_all_red[g] = false;
+  if (!members.empty()) lights[static_cast<size_t>(members.front())].color = LightColor::kGreen;
 }
 
 void World::Impl::StepLights(double dt) {
@@ -84,6 +95,17 @@ std::string World::SetTrafficLight(uint32_t id, std::optional<LightColor> color,
 
 void World::FreezeAllLights(bool freeze) {
   for (auto& l : impl_->lights) l.frozen = freeze;
+}
+
+std::string World::ResetLightGroup(uint32_t id) {
+  auto& I = *impl_;
+  if (id == 0 || id > I.lights.size()) return "actor " + std::to_string(id) + " is not a traffic light of this map";
+  I.ResetLightGroup(static_cast<size_t>(I.lights[id - 1].group));
+  return {};
+}
+
+void World::ResetAllLights() {
+  for (size_t g = 0; g < impl_->group_lights.size(); ++g) impl_->ResetLightGroup(g);
 }
 
 }  // namespace lockstep::ground

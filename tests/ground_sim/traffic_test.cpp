@@ -369,3 +369,68 @@ TEST(GroundTraffic, AWalkerCrossesAtTheCrosswalkAfterTheCarPasses) {
 
 }  // namespace
 }  // namespace lockstep::ground
+
+namespace lockstep::ground {
+namespace {
+
+// CARLA's TrafficLight.reset_group / world.reset_all_traffic_lights: the group's lights go
+// back to the start of the cycle (its first light green, the others red, elapsed 0), other
+// groups run on; the light times set are kept.
+TEST(GroundTraffic, AGroupResetPutsItsLightsBackToTheCycleStart) {
+  World w(testing::Town01(), 3);
+  const auto start = w.Lights();
+  ASSERT_GT(start.size(), 10u);
+  ASSERT_EQ(w.SetTrafficLight(start[0].id, std::nullopt, 4, -1, -1, std::nullopt), "");
+  for (int i = 0; i < 400; ++i) w.Step(kDt);  // 20 s: the first lights are past green
+  const int group = start[0].state.group;
+  const auto before = w.Lights();
+  int changed = 0;
+  for (size_t k = 0; k < start.size(); ++k) changed += before[k].state.color != start[k].state.color;
+  ASSERT_GT(changed, 0) << "no light changed in 20 s";
+  ASSERT_EQ(w.ResetLightGroup(start[0].id), "");
+  const auto after = w.Lights();
+  for (size_t k = 0; k < start.size(); ++k) {
+    if (after[k].state.group == group) {
+      EXPECT_EQ(after[k].state.color, start[k].state.color) << "light " << after[k].id;
+      EXPECT_EQ(after[k].state.elapsed, 0.0) << "light " << after[k].id;
+    } else {
+      EXPECT_EQ(after[k].state.color, before[k].state.color) << "another group's light " << after[k].id;
+      EXPECT_EQ(after[k].state.elapsed, before[k].state.elapsed) << "another group's light " << after[k].id;
+    }
+  }
+  EXPECT_EQ(after[0].state.green_time, 4.0);
+  EXPECT_NE(w.ResetLightGroup(0), "");
+  EXPECT_NE(w.ResetLightGroup(static_cast<uint32_t>(start.size() + 1)), "");
+  for (int i = 0; i < 77; ++i) w.Step(kDt);
+  w.ResetAllLights();
+  const auto all = w.Lights();
+  for (size_t k = 0; k < start.size(); ++k) {
+    EXPECT_EQ(all[k].state.color, start[k].state.color) << "light " << all[k].id;
+    EXPECT_EQ(all[k].state.elapsed, 0.0) << "light " << all[k].id;
+  }
+}
+
+// world.set_pedestrians_cross_factor reaches the walker AI: at 0 a walker at the kerb of a
+// free crosswalk never steps onto the road, at 1 it crosses.
+TEST(GroundTraffic, ThePedestriansCrossFactorDecidesWhetherAWalkerCrosses) {
+  auto town = testing::CrosswalkTown();
+  ASSERT_EQ(town->Crosswalks().size(), 1u);
+  const auto& cw = town->Crosswalks()[0];
+  const Vec3 kerb = cw.ends[0].y() < 0 ? cw.ends[0] : cw.ends[1];
+  for (double factor : {0.0, 1.0}) {
+    World w(town, 3);
+    ASSERT_EQ(w.SetPedestriansCrossFactor(factor), "");
+    ASSERT_EQ(w.AddWalker(9, "walker.pedestrian.0001", {}, Pose::FromYaw(kerb + Vec3(0, 0, 1.0), M_PI / 2)), "");
+    ASSERT_EQ(w.AddWalkerController(10, 9), "");
+    ASSERT_EQ(w.ControllerStart(10), "");
+    bool on_road = false;
+    for (int i = 0; i < 600 && !on_road; ++i) {
+      w.Step(kDt);
+      on_road = std::abs(w.Walker(9)->pose.position.y()) < 3.0;
+    }
+    EXPECT_EQ(on_road, factor > 0) << "cross factor " << factor;
+  }
+}
+
+}  // namespace
+}  // namespace lockstep::ground

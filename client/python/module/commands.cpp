@@ -90,6 +90,11 @@ const std::map<std::string, msg::DroneCommandKind> kDroneKinds = {
     {"rotate_by_yaw_rate", msg::DroneCommandKind::DRONE_ROTATE_BY_YAW_RATE},
 };
 
+const std::map<std::string, msg::TrafficLightAction> kLightActions = {
+    {"set", msg::TrafficLightAction::LIGHT_SET},
+    {"reset_group", msg::TrafficLightAction::LIGHT_RESET_GROUP},
+    {"reset_all", msg::TrafficLightAction::LIGHT_RESET_ALL}};
+
 const std::map<std::string, msg::TrafficLightColor> kLightColors = {
     {"red", msg::TrafficLightColor::LIGHT_RED},       {"yellow", msg::TrafficLightColor::LIGHT_YELLOW},
     {"green", msg::TrafficLightColor::LIGHT_GREEN},   {"off", msg::TrafficLightColor::LIGHT_OFF},
@@ -211,7 +216,12 @@ msg::CommandBody CommandFromDict(const py::dict& d) {
     x.yellow_time(f.Get<double>("yellow_time", -1));
     x.red_time(f.Get<double>("red_time", -1));
     x.freeze(f.Get<bool>("freeze", false));
+    x.action(EnumOf(f.Get<std::string>("action", "set"), kLightActions, "traffic light action"));
     b.traffic_light(x);
+  } else if (type == "pedestrians") {
+    msg::PedestrianSettings x;
+    x.cross_factor(f.Need<double>("cross_factor"));
+    b.pedestrians(x);
   } else if (type == "traffic_manager") {
     msg::TrafficManagerCommand x;
     x.parameter(EnumOf(f.Need<std::string>("parameter"), kTmParameters, "traffic manager parameter"));
@@ -282,7 +292,7 @@ msg::CommandBody CommandFromDict(const py::dict& d) {
   } else {
     throw py::value_error("unknown command type '" + type +
                           "' (spawn, destroy, set_transform, vehicle_control, walker_control, traffic_light, "
-                          "traffic_manager, drone, ackermann, actor_physics, vehicle_physics, walker_ai)");
+                          "traffic_manager, drone, ackermann, actor_physics, vehicle_physics, walker_ai, pedestrians)");
   }
   f.CheckAllUsed();
   return b;

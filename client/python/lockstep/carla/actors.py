@@ -460,7 +460,10 @@ class TrafficLight(Actor):
         return BoundingBox(Location(local.x, local.y, local.z), Vector3D(*extent))
 
     def reset_group(self):
-        unsupported('TrafficLight.reset_group', 'no group reset command on the wire')
+        """This light's group back to the start of its cycle (its first light green)."""
+        self._world._require('ground_sim', 'TrafficLight.reset_group')
+        self._world._client.submit({'type': 'traffic_light', 'actor': self.id, 'action': 'reset_group'},
+                                   watch='TrafficLight.reset_group')
 
 
 class Sensor(Actor):

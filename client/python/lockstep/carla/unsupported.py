@@ -16,8 +16,6 @@ add_unsupported(Vehicle, {
 })
 add_unsupported(World, {
     'get_names_of_all_objects': _NO_SCENE,
-    'set_pedestrians_cross_factor': 'ground_sim has a cross factor, but no command sets it on the wire yet',
-    'set_pedestrians_seed': 'walkers draw from the run seed (lockstep up --seed, Client.reload_world)',
     'set_annotations_traverse_translucency': 'render has no translucent annotations to traverse',
     'ground_projection': 'ray casts run inside the sensors service, not in clients',
     'enable_environment_objects': _NO_SCENE,

@@ -1,6 +1,7 @@
 """carla.Client, World, WorldSettings, WeatherParameters, TrafficManager, snapshots."""
 import glob
 import os
+import random
 import threading
 import time
 
@@ -308,6 +309,8 @@ class World:
         self._map_key = None
         self._bp_cache = None
         self._spectator = _Spectator()
+        # CARLA's navigation randomness (set_pedestrians_seed): get_random_location_from_navigation.
+        self._pedestrians_random = random.Random()
         self._on_tick = {}
         self._next_cb = 1
         # (actor, 'physics' | 'light_state') -> (frame, value) this client applied: shown
@@ -476,15 +479,26 @@ class World:
             a.freeze(frozen)
 
     def reset_all_traffic_lights(self):
-        unsupported('World.reset_all_traffic_lights', 'no traffic light reset command on the wire')
+        """Every light group back to the start of its cycle (its first light green)."""
+        self._require('ground_sim', 'World.reset_all_traffic_lights')
+        self._client.submit({'type': 'traffic_light', 'actor': 0, 'action': 'reset_all'})
+
+    def set_pedestrians_cross_factor(self, percentage):
+        """The share (0..1) of AI walkers that cross the road (ground_sim: at crosswalks)."""
+        self._require('ground_sim', 'World.set_pedestrians_cross_factor')
+        self._client.submit({'type': 'pedestrians', 'cross_factor': float(percentage)})
+
+    def set_pedestrians_seed(self, seed):
+        """Seeds get_random_location_from_navigation, as CARLA seeds its navigation. The
+        walker AI controllers in ground_sim draw from the run seed instead."""
+        self._pedestrians_random = random.Random(int(seed))
 
     def get_random_location_from_navigation(self):
-        import random
         points = self._client.map().pedestrian_spawn_points(20.0)
         if not points:
             return None
         from .map import _transform
-        return _transform(random.choice(points)).location
+        return _transform(self._pedestrians_random.choice(points)).location
 
     def get_vehicles_light_states(self):
         """{vehicle id: carla.VehicleLightState bits} from the latest GroundState."""

@@ -139,6 +139,11 @@ class World {
   std::string SetTrafficLight(uint32_t id, std::optional<LightColor> color, double green, double yellow, double red,
                               std::optional<bool> freeze);
   void FreezeAllLights(bool freeze);
+  // CARLA's TrafficLight.reset_group: the light's group back to the start of its cycle
+  // (every light red, then the group's first light green, elapsed 0; times and freeze kept).
+  std::string ResetLightGroup(uint32_t id);
+  // CARLA's world.reset_all_traffic_lights: ResetLightGroup for every group.
+  void ResetAllLights();
 
   // Traffic Manager.
   std::string SetAutopilot(uint32_t vehicle, bool on);

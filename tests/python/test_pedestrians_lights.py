@@ -1,0 +1,79 @@
+"""CARLA's world-level calls that generate_traffic.py makes, against a running simulation:
+set_pedestrians_cross_factor (the coordinator checks 0..1), set_pedestrians_seed (seeds
+get_random_location_from_navigation), TrafficLight.reset_group and
+World.reset_all_traffic_lights (the group's first light green, the others red, from 0 s)."""
+import math
+
+import pytest
+
+import carla
+import lockstep
+
+from conftest import has_service
+
+pytestmark = pytest.mark.skipif(not has_service('ground_sim'), reason='needs the ground_sim service')
+
+
+@pytest.fixture(scope='module')
+def world(sim):
+    client = carla.Client('localhost', 2000)
+    client.set_timeout(30)
+    return client.get_world()
+
+
+def _groups(world):
+    """{group: [light states by id]} as ground_sim reports them."""
+    out = {}
+    for l in sorted(world._client.traffic_lights(), key=lambda l: l['id']):
+        out.setdefault(l['group'], []).append(l)
+    return out
+
+
+def _at_cycle_start(lights, dt):
+    return (lights[0]['state'] == 'green' and all(l['state'] == 'red' for l in lights[1:])
+            and all(l['elapsed'] <= dt + 1e-9 for l in lights))
+
+
+def test_pedestrians_cross_factor_is_accepted_in_range_and_refused_outside(world):
+    world.set_pedestrians_cross_factor(0.0)
+    world.set_pedestrians_cross_factor(1.0)
+    world.set_pedestrians_cross_factor(0.25)
+    world.tick()
+    for bad in (1.5, -0.1, float('nan')):
+        with pytest.raises(lockstep.CommandRejected) as e:
+            world.set_pedestrians_cross_factor(bad)
+        assert 'pedestrians cross factor' in e.value.reason
+        assert ('NaN' in e.value.reason) if math.isnan(bad) else ('outside [0, 1]' in e.value.reason)
+
+
+def test_pedestrians_seed_repeats_the_random_navigation_locations(world):
+    def draw(seed):
+        world.set_pedestrians_seed(seed)
+        return [(p.x, p.y, p.z) for p in (world.get_random_location_from_navigation() for _ in range(8))]
+    first = draw(7)
+    assert first == draw(7)
+    assert first != draw(8)
+
+
+def test_reset_group_and_reset_all_put_the_lights_back_to_the_cycle_start(world):
+    dt = world.get_settings().fixed_delta_seconds
+    groups = [g for g in _groups(world).values() if len(g) >= 2]
+    if len(groups) < 2:
+        pytest.skip('the town has fewer than two signalled junctions')
+    a, b = groups[0], groups[1]
+    # Both groups away from the start: their last light green.
+    world.get_actor(a[-1]['id']).set_state(carla.TrafficLightState.Green)
+    world.get_actor(b[-1]['id']).set_state(carla.TrafficLightState.Green)
+    for _ in range(3):
+        world.tick()
+    now = _groups(world)
+    assert now[a[0]['group']][-1]['state'] == 'green' and now[b[0]['group']][-1]['state'] == 'green'
+    world.get_actor(a[0]['id']).reset_group()
+    world.tick()
+    now = _groups(world)
+    assert _at_cycle_start(now[a[0]['group']], dt), now[a[0]['group']]
+    assert not _at_cycle_start(now[b[0]['group']], dt)  # the other group runs on
+    world.reset_all_traffic_lights()
+    world.tick()
+    for g, lights in _groups(world).items():
+        assert _at_cycle_start(lights, dt), (g, lights)

@@ -5,8 +5,10 @@
 
 #include <atomic>
 #include <cmath>
+#include <condition_variable>
 #include <limits>
 #include <map>
+#include <optional>
 #include <mutex>
 #include <thread>
 
@@ -15,6 +17,7 @@
 #include "lockstep/client/client.h"
 #include "lockstep/client/multirotor.h"
 #include "lockstep/coordinator/coordinator.h"
+#include "lockstep/runtime/actor_list.h"
 
 namespace lockstep::client {
 namespace {
@@ -95,6 +98,75 @@ TEST_F(ClientTest, TickReturnsConsecutiveFramesAndTheirState) {
   ASSERT_TRUE(info.has_value());
   EXPECT_EQ(info->blueprint, "drone.generic_quad");
   EXPECT_EQ(info->kind, msg::ActorKind::ACTOR_DRONE);
+}
+
+// lockstep/actors: a reader that joins after the spawns gets every live actor's spawn
+// (attributes included), without the destroyed ones, from the coordinator's latest list.
+TEST_F(ClientTest, ALateReaderOfTheActorListGetsEveryLiveActorsSpawn) {
+  Start(true);
+  const uint32_t hero = client_->spawn("drone.generic_quad", MakePose(47.75, 1.75, 0), {{"role_name", "hero"}});
+  const uint32_t gone = client_->spawn("drone.generic_quad", MakePose(43.25, 1.75, 0), {{"role_name", "gone"}});
+  client_->tick();
+  client_->destroy(gone);
+  const uint64_t k = client_->tick();
+  std::mutex mu;
+  std::condition_variable cv;
+  std::optional<msg::ActorList> latest;
+  Reader<msg::ActorList> late(*bus_, topics::kActors, [&](const msg::ActorList& l, const SampleInfo&) {
+    std::lock_guard<std::mutex> lock(mu);
+    latest = l;
+    cv.notify_all();
+  });
+  std::unique_lock<std::mutex> lock(mu);
+  ASSERT_TRUE(cv.wait_for(lock, std::chrono::seconds(10), [&] { return latest.has_value(); })) << "no actor list";
+  EXPECT_EQ(latest->run(), client_->run());
+  EXPECT_EQ(latest->frame(), k);
+  ASSERT_EQ(latest->actors().size(), 1u);
+  const auto& a = latest->actors()[0];
+  EXPECT_EQ(a.spawn().actor(), hero);
+  EXPECT_EQ(a.spawn().blueprint().to_string(), "drone.generic_quad");
+  EXPECT_EQ(a.spawn().owner().to_string(), "air_sim");
+  std::string role;
+  for (const auto& at : a.spawn().attributes()) {
+    if (at.key().to_string() == "role_name") role = at.value().to_string();
+  }
+  EXPECT_EQ(role, "hero");
+  EXPECT_EQ(a.frame(), k - 1);
+}
+
+// A watched command the coordinator accepts but the owning service refuses when it
+// applies it: the tick that applies it throws the service's reason, naming the call;
+// watched commands the service applies throw nothing.
+TEST_F(ClientTest, AWatchedCommandTheServiceRefusesIsThrownByTheTickThatAppliesIt) {
+  Start(true);
+  const uint32_t drone = client_->spawn("drone.generic_quad", MakePose(43.25, -1.75, 3.0));
+  client_->tick();
+  client_->tick();  // falling by now
+  auto body = [&](msg::DroneCommandKind kind, uint64_t id) {
+    msg::DroneCommand c;
+    c.actor(drone);
+    c.kind(kind);
+    c.command_id(id);
+    msg::CommandBody b;
+    b.drone(c);
+    return b;
+  };
+  client_->SubmitWatched(body(msg::DroneCommandKind::DRONE_ARM, 1), "armDisarm");
+  for (int i = 0; i < 3; ++i) EXPECT_NO_THROW(client_->tick());
+  client_->SubmitWatched(body(msg::DroneCommandKind::DRONE_TAKEOFF, 2), "takeoffAsync");
+  std::string what, reason;
+  for (int i = 0; i < 2 && what.empty(); ++i) {  // the applying tick, or the next if the event came late
+    try {
+      client_->tick();
+    } catch (const CommandRejected& e) {
+      what = e.what();
+      reason = e.reason();
+    }
+  }
+  EXPECT_NE(reason.find("cannot take off while moving"), std::string::npos) << what;
+  EXPECT_NE(what.find("takeoffAsync (actor " + std::to_string(drone)), std::string::npos) << what;
+  EXPECT_NE(what.find("air_sim"), std::string::npos) << what;
+  EXPECT_NO_THROW(client_->check_failures());  // thrown once
 }
 
 TEST_F(ClientTest, TickInFreeRunningModeRaisesTheCoordinatorsReason) {

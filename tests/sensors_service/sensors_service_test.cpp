@@ -38,8 +38,11 @@ class SensorsServiceTest : public ::testing::Test {
     c.services.push_back({"sensors_b", "sensors", "", {}, true, true, "never"});
     bus_ = CreateInProcessBus();
     air_reader_ = Reader<msg::AirState>(*bus_, topics::kAirState, [this](const msg::AirState& s, const SampleInfo&) {
-      std::lock_guard<std::mutex> lock(mu_);
-      air_[s.stamp().frame()] = s;
+      {
+        std::lock_guard<std::mutex> lock(mu_);
+        air_[s.stamp().frame()] = s;
+      }
+      cv_.notify_all();
     });
     cloud_reader_ = Reader<msg::PointCloud>(*bus_, topics::kPointCloud, [this](const msg::PointCloud& p, const SampleInfo&) {
       {
@@ -136,9 +139,10 @@ class SensorsServiceTest : public ::testing::Test {
     ASSERT_GE(last, 80u);
     const uint64_t shift = mode == msg::PerceptionMode::PERCEPTION_PIPELINED ? 1 : 0;
     std::unique_lock<std::mutex> lock(mu_);
-    // Samples may be delivered after the FrameDone the observer saw: wait for them (or more).
+    // Samples (and this test's copy of the AirState, one writer: in frame order) may be
+    // delivered after the FrameDone the observer saw: wait for them (or more).
     cv_.wait_for(lock, 10s, [&] {
-      return clouds_[lidar_].size() >= last - shift && clouds_[watcher_].size() >= last - shift && imus_[imu_].size() >= last - shift;
+      return air_.count(last) > 0 && clouds_[lidar_].size() >= last - shift && clouds_[watcher_].size() >= last - shift && imus_[imu_].size() >= last - shift;
     });
     // One sample per sensor per frame, stamped with the frame it shows: k (strict) or k-1.
     for (uint32_t sensor : {lidar_, watcher_}) {

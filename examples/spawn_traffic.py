@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
-"""CARLA's generate_traffic.py, trimmed: vehicles under the Traffic Manager and walkers,
-spawned in batches, in synchronous mode.
+"""CARLA's generate_traffic.py, trimmed: vehicles under the Traffic Manager and walkers
+with AI controllers, spawned in batches, in synchronous mode.
 Run: lockstep python examples/spawn_traffic.py -n 20 -w 10 --ticks 200"""
 import argparse
 import random
@@ -21,7 +21,7 @@ def main():
     args = argparser.parse_args()
     random.seed(args.seed)
 
-    vehicles_list, walkers_list = [], []
+    vehicles_list, walkers_list, controllers_list = [], [], []
     client = carla.Client(args.host, args.port)
     client.set_timeout(10.0)
     world = client.get_world()
@@ -62,6 +62,21 @@ def main():
                 print('walker: %s' % response.error)
             else:
                 walkers_list.append(response.actor_id)
+        # As generate_traffic: an AI controller per walker, started after a tick.
+        controller_bps = world.get_blueprint_library().filter('controller.ai.walker')
+        batch = [command.SpawnActor(controller_bps[0], carla.Transform(), w) for w in walkers_list if controller_bps]
+        for response in client.apply_batch_sync(batch, True):
+            if response.error:
+                print('walker controller: %s' % response.error)
+            else:
+                controllers_list.append(response.actor_id)
+        world.tick()
+        for controller in world.get_actors(controllers_list):
+            controller.start()
+            goal = world.get_random_location_from_navigation()
+            if goal is not None:
+                controller.go_to_location(goal)
+            controller.set_max_speed(1.4)
         print('spawned %d vehicles and %d walkers' % (len(vehicles_list), len(walkers_list)))
 
         for _ in range(args.ticks):
@@ -69,7 +84,9 @@ def main():
         moving = sum(1 for a in world.get_actors(vehicles_list) if a.get_velocity().length() > 0.5)
         print('%d of %d vehicles moving after %d ticks' % (moving, len(vehicles_list), args.ticks))
     finally:
-        client.apply_batch([command.DestroyActor(x) for x in vehicles_list + walkers_list])
+        for controller in world.get_actors(controllers_list):
+            controller.stop()
+        client.apply_batch([command.DestroyActor(x) for x in controllers_list + vehicles_list + walkers_list])
         settings.synchronous_mode = False
         world.apply_settings(settings)
         print('destroyed %d actors' % (len(vehicles_list) + len(walkers_list)))

@@ -89,7 +89,7 @@ std::pair<Result, Result> Compare(Renderer& r, Town& town, const std::vector<Cam
   double seconds[2] = {0, 0};
   for (int k = 0; k < rounds; ++k) {
     for (int on = 0; on < 2; ++on) {
-      r.SetTuning(on ? RenderTuning{} : RenderTuning{false, false, false, false});
+      r.SetTuning(on ? RenderTuning{} : RenderTuning{false, false, false, false, false});
       const Result x = Run(r, town, cams, per, 1);
       seconds[on] += per / x.fps;
       sum[on].triangles += x.triangles;
@@ -151,10 +151,10 @@ int Main(int argc, char** argv) {
   if (run("1cam")) {
     PrintCompare("1cam_800x600_before_after", Compare(r, town, {one}, frames), LoadAverage());
     if (ablation) {
-      const char* names[] = {"output_variants", "depth_prepass", "front_to_back", "static_shadow_cache"};
-      for (int k = 0; k < 4; ++k) {
+      const char* names[] = {"output_variants", "depth_prepass", "front_to_back", "static_shadow_cache", "sky_by_clear"};
+      for (int k = 0; k < 5; ++k) {
         RenderTuning t;
-        bool* flags[] = {&t.output_variants, &t.depth_prepass, &t.front_to_back, &t.static_shadow_cache};
+        bool* flags[] = {&t.output_variants, &t.depth_prepass, &t.front_to_back, &t.static_shadow_cache, &t.sky_by_clear};
         *flags[k] = false;
         r.SetTuning(t);
         const Result off = Run(r, town, {one}, frames / 2, 1);

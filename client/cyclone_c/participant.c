@@ -19,9 +19,19 @@
  * before the tick line. It sets checks_spawns = false: it has no checks of its own.
  *
  * Per tick it writes one line:
- *   tick <run> <frame> <n_commands> ground_frame=<g> air_frame=<a>
+ *   tick <run> <frame> <n_commands> ground_frame=<g> air_frame=<a> hash=<h> commands=<list>
  * where g and a are the newest GroundState / AirState frames of the run seen when the
- * step ran (0 = none yet). WorldInfo gives a line "world run=.. map=.. seed=.. required=..",
+ * step ran (0 = none yet), h the state hash it acks (the noop service's hash chain, so the
+ * two agree when they saw the same commands with the same bodies in the same frames), and
+ * list the tick's commands in order, "<kind>/<client>/<sequence>/<body digest>" joined by
+ * "," ("-" for none; kind is the CommandKind number, the digest is CommandBodyDigest of
+ * runtime/include/lockstep/runtime/noop_core.h, 16 hex digits).
+ *
+ * It is also a client: --command WHEN:KIND=VALUE sends a Command with a body
+ * (weather=CLOUDINESS: set_weather; tm_distance=M: the Traffic Manager's global distance to
+ * the leading vehicle) once it has stepped frame WHEN-1 (WHEN = signal: on the next
+ * SIGUSR1, one per signal), printing "sent <seq> <kind> <digest>", and prints every reply
+ * to it: "reply <seq> accepted=<0|1> run=<r> frame=<f> reason=<text>". WorldInfo gives a line "world run=.. map=.. seed=.. required=..",
  * FrameDone a line "done <run> <frame> ground_frame=<g> air_frame=<a>" (several FrameDone
  * arriving together give one line, for the newest).
  *
@@ -42,18 +52,42 @@
 #include "dds/dds.h"
 #include "lockstep/blueprint.h"
 #include "lockstep/clock.h"
+#include "lockstep/command.h"
 #include "lockstep/state.h"
 #include "lockstep/world.h"
 
 #define KIND "cyclone_c"
 #define HEARTBEAT_PERIOD DDS_MSECS(100)
 #define MAX_TAKE 16
+#define MAX_SPECS 16
 
 static volatile sig_atomic_t g_stop = 0;
+static volatile sig_atomic_t g_send_signals = 0; /* SIGUSR1s received */
 static void on_signal(int sig) {
-  (void)sig;
-  g_stop = 1;
+  if (sig == SIGUSR1) {
+    g_send_signals = g_send_signals + 1;
+  } else {
+    g_stop = 1;
+  }
 }
+
+typedef enum spec_kind { SPEC_WEATHER, SPEC_TM_DISTANCE } spec_kind;
+
+/* --command WHEN:KIND=VALUE */
+typedef struct command_spec {
+  uint64_t when;  /* send once frame when-1 is stepped; 0 = on a SIGUSR1 */
+  spec_kind kind;
+  double value;
+  bool sent;
+} command_spec;
+
+/* What the tick line reports of one command. */
+typedef struct tick_command {
+  int32_t kind;
+  char client[65];
+  uint64_t sequence;
+  uint64_t digest;
+} tick_command;
 
 typedef struct options {
   const char *name;
@@ -62,6 +96,8 @@ typedef struct options {
   bool wait_state;          /* at tick k, wait for ground and air state of frame >= k-1 */
   dds_duration_t state_timeout;
   dds_duration_t world_timeout;
+  command_spec specs[MAX_SPECS];
+  int n_specs;
 } options;
 
 typedef struct participant {
@@ -69,12 +105,15 @@ typedef struct participant {
   FILE *out;
   dds_entity_t dp;
   dds_entity_t tick_reader, world_reader, done_reader, ground_reader, air_reader;
-  dds_entity_t ack_writer, announce_writer, blueprint_writer;
+  dds_entity_t ack_writer, announce_writer, blueprint_writer, command_writer, reply_reader;
+  uint64_t next_sequence;   /* of our own commands */
+  int signals_handled;
   uint64_t owned_frame;     /* newest frame whose owned spawns were reported */
   dds_entity_t waitset;
 
   bool have_world;
   uint32_t world_run;       /* run of the newest WorldInfo */
+  uint64_t world_seed;      /* its seed */
   uint32_t run;             /* run we are in */
   bool joined;
   uint64_t last_frame;      /* last frame stepped (0 = none) */
@@ -87,6 +126,8 @@ typedef struct participant {
   uint32_t tick_run;
   uint64_t tick_frame;
   uint32_t tick_commands;
+  tick_command *tick_list;  /* its commands (tick_commands of them) */
+  uint32_t tick_capacity;
   dds_time_t next_heartbeat;
   char host[65];
 } participant;
@@ -106,6 +147,72 @@ static uint64_t fnv1a_u64(uint64_t h, uint64_t v) {
   for (int i = 0; i < 8; ++i) {
     h ^= (uint8_t)(v >> (8 * i)); /* little-endian bytes, as the C++ side hashes them */
     h *= 1099511628211ull;
+  }
+  return h;
+}
+
+static uint64_t fnv1a_bytes(uint64_t h, const void *data, size_t n) {
+  const unsigned char *b = data;
+  for (size_t i = 0; i < n; ++i) {
+    h ^= b[i];
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+static uint64_t fnv1a_u32(uint64_t h, uint32_t v) {
+  for (int i = 0; i < 4; ++i) {
+    h ^= (uint8_t)(v >> (8 * i));
+    h *= 1099511628211ull;
+  }
+  return h;
+}
+static uint64_t fnv1a_f32(uint64_t h, float f) {
+  uint32_t v;
+  memcpy(&v, &f, sizeof v);
+  return fnv1a_u32(h, v);
+}
+static uint64_t fnv1a_f64(uint64_t h, double d) {
+  uint64_t v;
+  memcpy(&v, &d, sizeof v);
+  return fnv1a_u64(h, v);
+}
+/* Fnv1a64::Add(std::string_view): the length as 8 bytes, then the bytes. */
+static uint64_t fnv1a_str(uint64_t h, const char *s) {
+  const size_t n = strlen(s);
+  return fnv1a_bytes(fnv1a_u64(h, (uint64_t)n), s, n);
+}
+
+#define FNV_OFFSET 14695981039346656037ull
+
+/* CommandBodyDigest (runtime/src/noop_core.cpp): the kind, then the fields of the kinds
+ * it covers, in IDL order. */
+static uint64_t body_digest(const lockstep_msg_CommandBody *b) {
+  uint64_t h = fnv1a_u32(FNV_OFFSET, (uint32_t)b->_d);
+  switch (b->_d) {
+    case lockstep_msg_CMD_SET_WEATHER: {
+      const lockstep_msg_WeatherParameters *w = &b->_u.weather;
+      const float f[] = {w->cloudiness, w->precipitation, w->precipitation_deposits, w->wind_intensity,
+                         w->sun_azimuth_angle, w->sun_altitude_angle, w->fog_density, w->fog_distance,
+                         w->fog_falloff, w->wetness, w->scattering_intensity, w->mie_scattering_scale,
+                         w->rayleigh_scattering_scale, w->dust_storm};
+      for (size_t i = 0; i < sizeof f / sizeof f[0]; ++i) h = fnv1a_f32(h, f[i]);
+      break;
+    }
+    case lockstep_msg_CMD_TRAFFIC_MANAGER:
+      h = fnv1a_u32(h, (uint32_t)b->_u.traffic_manager.parameter);
+      h = fnv1a_u32(h, b->_u.traffic_manager.actor);
+      h = fnv1a_f64(h, b->_u.traffic_manager.value);
+      break;
+    case lockstep_msg_CMD_SPAWN_ACTOR:
+      h = fnv1a_str(h, b->_u.spawn_actor.blueprint);
+      h = fnv1a_u32(h, b->_u.spawn_actor.actor);
+      h = fnv1a_str(h, b->_u.spawn_actor.owner);
+      break;
+    case lockstep_msg_CMD_DESTROY_ACTOR:
+      h = fnv1a_u32(h, b->_u.destroy_actor.actor);
+      break;
+    default:
+      break;
   }
   return h;
 }
@@ -214,6 +321,7 @@ static void take_world(participant *p) {
     const lockstep_msg_WorldInfo *w = samples[i];
     p->have_world = true;
     p->world_run = w->run;
+    p->world_seed = w->seed;
     fprintf(p->out, "world run=%" PRIu32 " map=%s seed=%" PRIu64 " dt=%g sync=%d required=", w->run,
             w->map_name, w->seed, w->settings.fixed_delta_seconds, (int)w->settings.synchronous_mode);
     for (uint32_t j = 0; j < w->required_services._length; ++j) {
@@ -268,6 +376,19 @@ static void take_tick(participant *p) {
     p->tick_run = t->run;
     p->tick_frame = t->frame;
     p->tick_commands = t->commands._length;
+    if (t->commands._length > p->tick_capacity) {
+      p->tick_capacity = t->commands._length;
+      p->tick_list = realloc(p->tick_list, sizeof(tick_command) * p->tick_capacity);
+      if (!p->tick_list) die("out of memory", DDS_RETCODE_OUT_OF_RESOURCES);
+    }
+    for (uint32_t j = 0; j < t->commands._length; ++j) {
+      const lockstep_msg_Command *c = &t->commands._buffer[j];
+      tick_command *tc = &p->tick_list[j];
+      tc->kind = (int32_t)c->body._d;
+      snprintf(tc->client, sizeof tc->client, "%s", c->client);
+      tc->sequence = c->sequence_number;
+      tc->digest = body_digest(&c->body);
+    }
     if (t->frame <= p->owned_frame && t->run == p->run) continue; /* a re-sent tick */
     p->owned_frame = t->frame;
     for (uint32_t j = 0; j < t->commands._length; ++j) {
@@ -279,6 +400,67 @@ static void take_tick(participant *p) {
     }
   }
   if (n > 0) dds_return_loan(p->tick_reader, samples, n);
+}
+
+/* Replies to our own commands (the topic is keyed by client; others' are skipped). */
+static void take_replies(participant *p) {
+  void *samples[MAX_TAKE] = {NULL};
+  dds_sample_info_t infos[MAX_TAKE];
+  int32_t n;
+  while ((n = dds_take(p->reply_reader, samples, infos, MAX_TAKE, MAX_TAKE)) > 0) {
+    for (int32_t i = 0; i < n; ++i) {
+      const lockstep_msg_CommandReply *r = samples[i];
+      if (!infos[i].valid_data || strcmp(r->client, p->opt.name) != 0) continue;
+      fprintf(p->out, "reply %" PRIu64 " accepted=%d run=%" PRIu32 " frame=%" PRIu64 " reason=%s\n", r->sequence_number,
+              (int)r->accepted, r->run, r->frame, r->reason);
+      fflush(p->out);
+    }
+    dds_return_loan(p->reply_reader, samples, n);
+    memset(samples, 0, sizeof samples);
+  }
+}
+
+static void send_command(participant *p, const command_spec *spec) {
+  lockstep_msg_Command c;
+  memset(&c, 0, sizeof c);
+  snprintf(c.client, sizeof c.client, "%s", p->opt.name);
+  c.sequence_number = ++p->next_sequence;
+  if (spec->kind == SPEC_WEATHER) {
+    c.body._d = lockstep_msg_CMD_SET_WEATHER;
+    c.body._u.weather.cloudiness = (float)spec->value; /* every other field 0 */
+  } else {
+    c.body._d = lockstep_msg_CMD_TRAFFIC_MANAGER;
+    c.body._u.traffic_manager.parameter = lockstep_msg_TM_DISTANCE_TO_LEADING_VEHICLE;
+    c.body._u.traffic_manager.actor = 0; /* global */
+    c.body._u.traffic_manager.value = spec->value;
+  }
+  dds_return_t rc = dds_write(p->command_writer, &c);
+  if (rc < 0) die("write command", rc);
+  fprintf(p->out, "sent %" PRIu64 " %d %016" PRIx64 "\n", c.sequence_number, (int)c.body._d, body_digest(&c.body));
+  fflush(p->out);
+}
+
+/* Sends the commands due once `stepped` is the last frame stepped, and one signal command
+ * per SIGUSR1 received. */
+static void send_due(participant *p, uint64_t stepped) {
+  for (int i = 0; i < p->opt.n_specs; ++i) {
+    command_spec *c = &p->opt.specs[i];
+    if (!c->sent && c->when > 0 && c->when <= stepped + 1) {
+      send_command(p, c);
+      c->sent = true;
+    }
+  }
+  while (p->signals_handled < g_send_signals) {
+    ++p->signals_handled;
+    for (int i = 0; i < p->opt.n_specs; ++i) {
+      command_spec *c = &p->opt.specs[i];
+      if (!c->sent && c->when == 0) {
+        send_command(p, c);
+        c->sent = true;
+        break;
+      }
+    }
+  }
 }
 
 /* Waits until `deadline` or data, sending heartbeats when due. False once stopping. */
@@ -295,6 +477,8 @@ static bool pump(participant *p, dds_time_t deadline) {
   take_world(p);
   take_states(p);
   take_tick(p);
+  take_replies(p);
+  if (p->joined) send_due(p, p->last_frame);
   return !g_stop;
 }
 
@@ -316,7 +500,8 @@ static bool wait_world(participant *p, bool any_run, uint32_t run) {
 static void begin_run(participant *p, uint32_t run) {
   p->run = run;
   p->last_frame = 0;
-  p->last_hash = 0;
+  /* NoopCore::BeginRun: (run, seed); the WorldInfo of `run` is the newest one here. */
+  p->last_hash = fnv1a_u64(fnv1a_u32(FNV_OFFSET, run), p->world_seed);
   p->ground_frame = 0;
   p->air_frame = 0;
   p->last_done = 0;
@@ -337,7 +522,9 @@ static bool join(participant *p) {
     dds_subscription_matched_status_t tick_st;
     dds_get_publication_matched_status(p->ack_writer, &ack_st);
     dds_get_subscription_matched_status(p->tick_reader, &tick_st);
-    if ((ack_st.current_count > 0 && tick_st.current_count > 0) || dds_time() >= deadline) break;
+    dds_publication_matched_status_t command_st = {.current_count = 1};
+    if (p->opt.n_specs > 0) dds_get_publication_matched_status(p->command_writer, &command_st);
+    if ((ack_st.current_count > 0 && tick_st.current_count > 0 && command_st.current_count > 0) || dds_time() >= deadline) break;
     if (!pump(p, dds_time() + DDS_MSECS(10))) return false;
   }
   pump(p, dds_time()); /* whatever the match brought */
@@ -354,6 +541,18 @@ static bool join(participant *p) {
   return true;
 }
 
+/* The tick's command list as "<kind>/<client>/<sequence>/<digest>,..." ("-" if none). */
+static void print_commands(participant *p) {
+  if (p->tick_commands == 0) {
+    fputc('-', p->out);
+    return;
+  }
+  for (uint32_t i = 0; i < p->tick_commands; ++i) {
+    const tick_command *c = &p->tick_list[i];
+    fprintf(p->out, "%s%d/%s/%" PRIu64 "/%016" PRIx64, i ? "," : "", (int)c->kind, c->client, c->sequence, c->digest);
+  }
+}
+
 static bool step(participant *p, uint64_t frame, uint32_t n_commands) {
   if (p->opt.wait_state && frame > 1) {
     /* Jacobi coupling: tick k reads the world of frame k-1. The publishers wrote it before
@@ -367,14 +566,23 @@ static bool step(participant *p, uint64_t frame, uint32_t n_commands) {
   }
   p->last_frame = frame;
   /* Only what the tick stream decides goes into the hash, so world hashes replay; the
-   * state frames seen depend on delivery timing and are reported, not hashed. */
-  uint64_t h = 14695981039346656037ull;
-  h = fnv1a_u64(h, p->run);
-  h = fnv1a_u64(h, frame);
-  h = fnv1a_u64(h, n_commands);
+   * state frames seen depend on delivery timing and are reported, not hashed. It is
+   * NoopCore's chain: (previous hash, frame, then per command CommandHash = (client,
+   * sequence, kind, body digest)). */
+  uint64_t h = fnv1a_u64(fnv1a_u64(FNV_OFFSET, p->last_hash), frame);
+  for (uint32_t i = 0; i < n_commands; ++i) {
+    const tick_command *c = &p->tick_list[i];
+    uint64_t ch = fnv1a_str(FNV_OFFSET, c->client);
+    ch = fnv1a_u64(ch, c->sequence);
+    ch = fnv1a_u32(ch, (uint32_t)c->kind);
+    ch = fnv1a_u64(ch, c->digest);
+    h = fnv1a_u64(h, ch);
+  }
   p->last_hash = h;
-  fprintf(p->out, "tick %" PRIu32 " %" PRIu64 " %" PRIu32 " ground_frame=%" PRIu64 " air_frame=%" PRIu64 "\n", p->run,
-          frame, n_commands, p->ground_frame, p->air_frame);
+  fprintf(p->out, "tick %" PRIu32 " %" PRIu64 " %" PRIu32 " ground_frame=%" PRIu64 " air_frame=%" PRIu64 " hash=%016" PRIx64 " commands=",
+          p->run, frame, n_commands, p->ground_frame, p->air_frame, h);
+  print_commands(p);
+  fputc('\n', p->out);
   fflush(p->out);
   return true;
 }
@@ -414,6 +622,7 @@ static bool handle_tick(participant *p) {
     fprintf(stderr, "tick %" PRIu64 " arrived after frame %" PRIu64 ": stepping on from here\n", frame, p->last_frame);
   }
   if (!step(p, frame, n_commands)) return false;
+  send_due(p, frame); /* before the ack: a command due after this frame enters the next tick */
   send_ack(p, frame);
   return true;
 }
@@ -422,6 +631,7 @@ static void usage(void) {
   fprintf(stderr,
           "usage: lockstep_cyclone_participant --name NAME [--domain N] [--ticks-file PATH]\n"
           "         [--wait-state] [--state-timeout-ms MS] [--world-timeout-s S]\n"
+          "         [--command WHEN:KIND=VALUE ...]\n"
           "  --name           service name (a required service in the launch config)\n"
           "  --domain         DDS domain id (default 0)\n"
           "  --ticks-file     write the per-tick lines here instead of stdout\n"
@@ -429,6 +639,9 @@ static void usage(void) {
           "  --wait-state     at tick k wait for GroundState and AirState of frame >= k-1\n"
           "  --state-timeout-ms  bound of that wait (default 2000)\n"
           "  --world-timeout-s   how long to wait for the coordinator (default 30)\n"
+          "  --command        send a Command as client NAME once frame WHEN-1 is stepped (WHEN = signal:\n"
+          "                   on the next SIGUSR1); KIND=VALUE is weather=CLOUDINESS (set_weather, the\n"
+          "                   other fields 0) or tm_distance=M (Traffic Manager, global); up to 16\n"
           "Network settings: CYCLONEDDS_URI (see client/cyclone_c/README.md).\n");
 }
 
@@ -438,6 +651,31 @@ static bool parse_int(const char *s, long min, long max, long *out) {
   long v = strtol(s, &end, 10);
   if (errno || !end || *end || v < min || v > max) return false;
   *out = v;
+  return true;
+}
+
+static bool parse_command(const char *v, command_spec *c) {
+  char when[32], kind[32];
+  double value;
+  char extra;
+  if (sscanf(v, "%31[^:]:%31[^=]=%lf%c", when, kind, &value, &extra) != 3) return false;
+  long n;
+  if (strcmp(when, "signal") == 0) {
+    c->when = 0;
+  } else if (parse_int(when, 1, 1000000000L, &n)) {
+    c->when = (uint64_t)n;
+  } else {
+    return false;
+  }
+  if (strcmp(kind, "weather") == 0 && value >= 0 && value <= 100) {
+    c->kind = SPEC_WEATHER;
+  } else if (strcmp(kind, "tm_distance") == 0 && value >= 0 && value <= 100) {
+    c->kind = SPEC_TM_DISTANCE;
+  } else {
+    return false;
+  }
+  c->value = value;
+  c->sent = false;
   return true;
 }
 
@@ -474,6 +712,13 @@ static bool parse_args(int argc, char **argv, options *o) {
       o->domain = (int)n, ++i;
     } else if (strcmp(a, "--ticks-file") == 0) {
       o->ticks_file = v, ++i;
+    } else if (strcmp(a, "--command") == 0) {
+      if (o->n_specs == MAX_SPECS || !parse_command(v, &o->specs[o->n_specs])) {
+        fprintf(stderr, "--command must be WHEN:weather=0..100 or WHEN:tm_distance=0..100 with WHEN a frame >= 1 or "
+                        "'signal', at most %d, got '%s'\n", MAX_SPECS, v);
+        return false;
+      }
+      ++o->n_specs, ++i;
     } else if (strcmp(a, "--config") == 0) {
       ++i;  /* `lockstep up` passes the launch config; --domain (also passed) is all we need */
     } else if (strcmp(a, "--state-timeout-ms") == 0) {
@@ -517,6 +762,7 @@ int main(int argc, char **argv) {
   sigemptyset(&sa.sa_mask);
   sigaction(SIGINT, &sa, NULL);
   sigaction(SIGTERM, &sa, NULL);
+  sigaction(SIGUSR1, &sa, NULL);
 
   p.dp = check(dds_create_participant((dds_domainid_t)p.opt.domain, NULL, NULL), "create_participant");
   p.waitset = check(dds_create_waitset(p.dp), "create_waitset");
@@ -531,6 +777,8 @@ int main(int argc, char **argv) {
   p.done_reader = make_reader(&p, &lockstep_msg_FrameDone_desc, "lockstep/frame_done", true, 1);
   p.ground_reader = make_reader(&p, &lockstep_msg_GroundState_desc, "lockstep/ground_state", true, 4);
   p.air_reader = make_reader(&p, &lockstep_msg_AirState_desc, "lockstep/air_state", true, 4);
+  p.command_writer = make_writer(&p, &lockstep_msg_Command_desc, "lockstep/command", false, 256);
+  p.reply_reader = make_reader(&p, &lockstep_msg_CommandReply_desc, "lockstep/command_reply", false, 256);
 
   announce(&p, lockstep_msg_SERVICE_STARTING);
   p.next_heartbeat = dds_time() + HEARTBEAT_PERIOD;
@@ -554,5 +802,6 @@ int main(int argc, char **argv) {
           p.opt.name, p.last_frame, p.last_done);
   dds_delete(p.dp);
   if (p.out != stdout) fclose(p.out);
+  free(p.tick_list);
   return 0;
 }

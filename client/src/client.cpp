@@ -13,8 +13,10 @@
 #include <mutex>
 #include <set>
 #include <thread>
+#include <tuple>
 
 #include "lockstep/map/map.h"
+#include "lockstep/runtime/actor_list.h"
 #include "lockstep/runtime/frame_buffer.h"
 #include "lockstep/runtime/hash.h"
 #include "lockstep/client/sample_pool.h"
@@ -61,6 +63,27 @@ bool Terminal(msg::DroneCommandStatus s) {
          s == msg::DroneCommandStatus::DRONE_CMD_CANCELLED || s == msg::DroneCommandStatus::DRONE_CMD_REJECTED;
 }
 
+const char* ActorPhysicsName(msg::ActorPhysicsKind k) {
+  switch (k) {
+    case msg::ActorPhysicsKind::PHYSICS_SET_TARGET_VELOCITY: return "set_target_velocity";
+    case msg::ActorPhysicsKind::PHYSICS_SET_TARGET_ANGULAR_VELOCITY: return "set_target_angular_velocity";
+    case msg::ActorPhysicsKind::PHYSICS_ADD_IMPULSE: return "add_impulse";
+    case msg::ActorPhysicsKind::PHYSICS_SET_SIMULATE_PHYSICS: return "set_simulate_physics";
+    case msg::ActorPhysicsKind::PHYSICS_SET_LIGHT_STATE: return "set_light_state";
+  }
+  return "actor physics command";
+}
+
+const char* WalkerAIName(msg::WalkerAIKind k) {
+  switch (k) {
+    case msg::WalkerAIKind::WALKER_AI_START: return "WalkerAIController.start";
+    case msg::WalkerAIKind::WALKER_AI_STOP: return "WalkerAIController.stop";
+    case msg::WalkerAIKind::WALKER_AI_GO_TO_LOCATION: return "WalkerAIController.go_to_location";
+    case msg::WalkerAIKind::WALKER_AI_SET_MAX_SPEED: return "WalkerAIController.set_max_speed";
+  }
+  return "walker AI controller command";
+}
+
 std::string Fmt(double v) {
   char b[32];
   std::snprintf(b, sizeof(b), "%g", v);
@@ -69,7 +92,8 @@ std::string Fmt(double v) {
 
 // What every client of this process learned from spawn replies and ticks, so a client
 // created later (an airsim client after a carla one spawned the drones) knows the
-// attributes (role_name) of actors spawned before it joined: the wire has no actor list.
+// attributes (role_name) of actors spawned before it joined even before the
+// coordinator's actor list (lockstep/actors) reaches it.
 struct SharedActors {
   std::mutex mu;
   std::map<std::pair<int, uint32_t>, std::map<uint32_t, ActorInfo>> by_run;  // (domain, run) -> actors
@@ -115,11 +139,24 @@ struct Client::Impl {
   std::map<uint32_t, ActorInfo> actors;  // current run
   uint32_t actors_run = 0;
   std::map<uint64_t, msg::SpawnActor> pending_spawns;  // our spawn requests by sequence number
+  std::set<std::pair<uint32_t, uint32_t>> removed;     // (run, actor) destroyed: a late actor list must not revive it
+  uint32_t listed_run = 0;                              // run of the latest lockstep/actors list
+  uint64_t listed_frame = 0;                            // its frame
+  std::set<uint32_t> listed;                            // its actors
   std::map<RunFrame, std::shared_ptr<const msg::GroundState>> ground;
   std::map<RunFrame, std::shared_ptr<const msg::AirState>> air;
   std::map<std::pair<uint32_t, uint64_t>, msg::DroneCommandStatus> drone_finished;  // (actor, command id)
   std::map<uint32_t, std::pair<uint64_t, msg::DroneCommandStatus>> drone_last;     // actor -> (id, status)
   std::map<uint32_t, std::deque<std::string>> drone_failures;  // actor -> air_sim's latest EVENT_COMMAND_FAILED messages
+  // Watched commands (SubmitWatched) and the services' failures, by (run, frame, actor).
+  struct Watched {
+    uint32_t run = 0;
+    uint64_t frame = 0;
+    uint32_t actor = 0;
+    std::string call;
+  };
+  std::deque<Watched> watched;
+  std::map<std::tuple<uint32_t, uint64_t, uint32_t>, std::string> service_failures;
   uint64_t next_seq = 1;
   uint64_t next_drone_command = 1;
   uint64_t drone_id_base = 0;
@@ -161,6 +198,7 @@ struct Client::Impl {
   Reader<msg::GroundState> ground_reader;
   Reader<msg::AirState> air_reader;
   Reader<msg::SimEvent> event_reader;
+  Reader<msg::ActorList> actors_reader;
 
   explicit Impl(ClientOptions o) : options(std::move(o)) {
     if (options.domain < 0) options.domain = DefaultDomain();
@@ -212,12 +250,19 @@ struct Client::Impl {
       auto p = std::make_shared<const msg::AirState>(a);
       Update(kFrame, [&] { OnAir(std::move(p)); });
     });
+    actors_reader = Reader<msg::ActorList>(*bus, topics::kActors, [this](const msg::ActorList& l, const SampleInfo&) {
+      Update([&] { OnActorList(l); });
+    });
     event_reader = Reader<msg::SimEvent>(*bus, topics::kEvent, [this](const msg::SimEvent& e, const SampleInfo&) {
       if (e.kind() != msg::EventKind::EVENT_COMMAND_FAILED) return;
       Update([&] {
         auto& q = drone_failures[e.actor()];
         q.push_back(e.message().to_string());
         while (q.size() > 8) q.pop_front();
+        if (watched.empty()) return;
+        std::string& f = service_failures[{e.stamp().run(), e.stamp().frame(), e.actor()}];
+        f.append(f.empty() ? "" : "; ").append(e.service().to_string()).append(": ").append(e.message().to_string());
+        while (service_failures.size() > 1024) service_failures.erase(service_failures.begin());
       });
     });
     try {
@@ -233,6 +278,7 @@ struct Client::Impl {
   void Shutdown() {
     // Readers first, so no callback runs while the rest goes away.
     event_reader = {};
+    actors_reader = {};
     air_reader = {};
     ground_reader = {};
     tick_reader = {};
@@ -319,7 +365,7 @@ struct Client::Impl {
       auto has = [&](const auto& m) { return !m.empty() && m.rbegin()->first >= done; };
       WaitUntil(lock, state_deadline, [&] {
         return done.first == run && done.second > 0 && (!MemberOfKind("air_sim") || has(air)) &&
-               (!MemberOfKind("ground_sim") || has(ground));
+               (!MemberOfKind("ground_sim") || has(ground)) && listed_run >= run;
       });
     }
   }
@@ -376,6 +422,7 @@ struct Client::Impl {
 
   void RemoveActor(uint32_t id) {
     actors.erase(id);
+    removed.insert({actors_run, id});
     {
       auto& shared = Shared();
       std::lock_guard<std::mutex> lock(shared.mu);
@@ -391,6 +438,38 @@ struct Client::Impl {
         ++it;
       }
     }
+  }
+
+  // The coordinator's list of live actors with their spawns: what a client that joined
+  // after the spawn knows of its blueprint and attributes.
+  // A list is the truth up to its frame: an actor it leaves out that was spawned by then
+  // (or seen only in a state, which a late joiner receives several frames of) is gone.
+  void OnActorList(const msg::ActorList& l) {
+    if (l.run() < listed_run || (l.run() == listed_run && l.frame() < listed_frame)) return;
+    if (l.run() < actors_run) return;
+    listed_run = l.run();
+    listed_frame = l.frame();
+    listed.clear();
+    for (const auto& a : l.actors()) {
+      const uint32_t id = a.spawn().actor();
+      listed.insert(id);
+      if (removed.count({l.run(), id})) continue;
+      auto it = l.run() == actors_run ? actors.find(id) : actors.end();
+      if (it == actors.end() || it->second.owner.empty()) AddActor(l.run(), a.frame(), a.spawn(), id);  // new, or seen in a state only
+    }
+    if (l.run() != actors_run) return;
+    std::vector<uint32_t> gone;
+    for (const auto& [id, a] : actors) {
+      if (!listed.count(id) && a.kind != msg::ActorKind::ACTOR_TRAFFIC_LIGHT && a.spawn_frame <= l.frame()) gone.push_back(id);
+    }
+    for (uint32_t id : gone) RemoveActor(id);
+  }
+
+  // Whether a state of (run, frame) may add actor `id` we have not heard of: not if it was
+  // destroyed, or the actor list of a later frame leaves it out.
+  bool MayAddFromState(uint32_t run, uint64_t frame, uint32_t id) const {
+    if (removed.count({run, id})) return false;
+    return !(listed_run == run && frame <= listed_frame && !listed.count(id));
   }
 
   void OnTick(const msg::Tick& t) {
@@ -419,10 +498,12 @@ struct Client::Impl {
     if (run == actors_run) {
       auto known = [&](uint32_t id, const std::string& bp, msg::ActorKind kind) {
         if (actors.count(id)) return;
+        if (kind != msg::ActorKind::ACTOR_TRAFFIC_LIGHT && !MayAddFromState(run, g->stamp().frame(), id)) return;
         ActorInfo& a = actors[id];
         a.id = id;
         a.blueprint = bp;
         a.kind = kind;
+        a.spawn_frame = g->stamp().frame();  // spawned by then
       };
       for (const auto& v : g->vehicles()) known(v.actor(), v.blueprint().to_string(), msg::ActorKind::ACTOR_VEHICLE);
       for (const auto& w : g->walkers()) known(w.actor(), w.blueprint().to_string(), msg::ActorKind::ACTOR_WALKER);
@@ -438,11 +519,12 @@ struct Client::Impl {
       actors_run = run;
     }
     for (const auto& d : a->drones()) {
-      if (run == actors_run && !actors.count(d.actor())) {
+      if (run == actors_run && !actors.count(d.actor()) && MayAddFromState(run, a->stamp().frame(), d.actor())) {
         ActorInfo& info = actors[d.actor()];
         info.id = d.actor();
         info.blueprint = d.blueprint().to_string();
         info.kind = msg::ActorKind::ACTOR_DRONE;
+        info.spawn_frame = a->stamp().frame();  // spawned by then
       }
       // Command completion: the latest status of each command, and a command replaced
       // by a newer one before it finished counts as cancelled.
@@ -611,6 +693,26 @@ struct Client::Impl {
     }
   }
 
+  // The first watched command whose failure arrived (mu held); watched commands older
+  // than two completed frames without one were applied and are forgotten.
+  std::optional<CommandRejected> TakeFailure() {
+    for (auto it = watched.begin(); it != watched.end();) {
+      auto f = service_failures.find({it->run, it->frame, it->actor});
+      if (f != service_failures.end()) {
+        CommandRejected e(it->call + " (actor " + std::to_string(it->actor) + ", frame " + std::to_string(it->frame) +
+                              ") failed in " + f->second,
+                          f->second);
+        service_failures.erase(f);
+        watched.erase(it);
+        return e;
+      }
+      const bool old = it->run < done.first || (it->run == done.first && done.second >= it->frame + 2);
+      it = old ? watched.erase(it) : std::next(it);
+    }
+    if (watched.empty()) service_failures.clear();
+    return std::nullopt;
+  }
+
   bool MemberOfKind(const std::string& kind) const {
     if (!status) return false;
     for (const auto& m : status->members()) {
@@ -704,6 +806,7 @@ uint64_t Client::tick() {
     }
   }
   s.AwaitFrameOutputs(r.run(), r.frame());
+  check_failures();
   return r.frame();
 }
 
@@ -715,7 +818,62 @@ uint64_t Client::wait_for_tick(double timeout_s) {
     throw ClientError("wait_for_tick(): no new frame after " + std::to_string(from.second) + " within " +
                       Fmt(timeout_s < 0 ? s.options.tick_timeout_s : timeout_s) + " s" + s.FaultReason());
   }
-  return s.done.second;
+  const uint64_t frame = s.done.second;
+  if (auto e = s.TakeFailure()) throw *e;
+  return frame;
+}
+
+msg::CommandReply Client::SubmitWatched(msg::CommandBody body, const std::string& call) {
+  const uint32_t actor = CommandActor(body);
+  const uint64_t seq = impl_->Send(std::move(body));
+  msg::CommandReply r = impl_->WaitReply(seq, call.c_str());
+  if (!r.accepted()) throw CommandRejected(call + " rejected: " + r.reason().to_string(), r.reason().to_string());
+  watch(actor, r.run(), r.frame(), call);
+  return r;
+}
+
+void Client::watch(uint32_t actor, uint32_t run, uint64_t frame, const std::string& call) {
+  std::lock_guard<std::mutex> lock(impl_->mu);
+  impl_->watched.push_back({run, frame, actor, call});
+  while (impl_->watched.size() > 4096) impl_->watched.pop_front();
+}
+
+void Client::check_failures() {
+  std::lock_guard<std::mutex> lock(impl_->mu);
+  if (auto e = impl_->TakeFailure()) throw *e;
+}
+
+void Client::apply_ackermann_control(const msg::VehicleAckermannControl& control) {
+  msg::CommandBody b;
+  b.ackermann(control);
+  SubmitWatched(std::move(b), "apply_ackermann_control");
+}
+
+void Client::apply_actor_physics(const msg::ActorPhysicsCommand& command) {
+  msg::CommandBody b;
+  b.actor_physics(command);
+  SubmitWatched(std::move(b), ActorPhysicsName(command.kind()));
+}
+
+void Client::apply_physics_control(uint32_t actor, const msg::VehiclePhysicsControl& physics) {
+  msg::VehiclePhysicsCommand c;
+  c.actor(actor);
+  c.physics(physics);
+  msg::CommandBody b;
+  b.vehicle_physics(c);
+  SubmitWatched(std::move(b), "apply_physics_control");
+}
+
+std::optional<msg::VehiclePhysicsControl> Client::physics_control(uint32_t actor) const {
+  const Snapshot s = snapshot();
+  if (const msg::VehicleState* v = s.Vehicle(actor)) return v->physics();
+  return std::nullopt;
+}
+
+void Client::walker_ai(const msg::WalkerAICommand& command) {
+  msg::CommandBody b;
+  b.walker_ai(command);
+  SubmitWatched(std::move(b), WalkerAIName(command.kind()));
 }
 
 uint32_t Client::reset(uint64_t seed) {
@@ -1019,6 +1177,24 @@ const char* CommandKindName(msg::CommandKind kind) {
     case msg::CommandKind::CMD_WALKER_AI: return "walker AI controller command";
   }
   return "command";
+}
+
+uint32_t CommandActor(const msg::CommandBody& b) {
+  using K = msg::CommandKind;
+  switch (b._d()) {
+    case K::CMD_DESTROY_ACTOR: return b.destroy_actor().actor();
+    case K::CMD_SET_TRANSFORM: return b.set_transform().actor();
+    case K::CMD_VEHICLE_CONTROL: return b.vehicle_control().actor();
+    case K::CMD_WALKER_CONTROL: return b.walker_control().actor();
+    case K::CMD_DRONE: return b.drone().actor();
+    case K::CMD_TRAFFIC_LIGHT: return b.traffic_light().actor();
+    case K::CMD_TRAFFIC_MANAGER: return b.traffic_manager().actor();
+    case K::CMD_VEHICLE_ACKERMANN: return b.ackermann().actor();
+    case K::CMD_ACTOR_PHYSICS: return b.actor_physics().actor();
+    case K::CMD_VEHICLE_PHYSICS: return b.vehicle_physics().actor();
+    case K::CMD_WALKER_AI: return b.walker_ai().actor();
+    default: return 0;
+  }
 }
 
 const char* DroneStatusName(msg::DroneCommandStatus status) {

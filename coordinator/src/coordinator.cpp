@@ -1,5 +1,6 @@
 #include "lockstep/coordinator/coordinator.h"
 
+#include <algorithm>
 #include <chrono>
 #include <condition_variable>
 #include <deque>
@@ -18,6 +19,7 @@
 #include "lockstep/coordinator/tick_barrier.h"
 #include "lockstep/map/map.h"
 #include "lockstep/map/scene.h"
+#include "lockstep/runtime/actor_list.h"
 #include "lockstep/runtime/command_builders.h"
 #include "lockstep/runtime/error.h"
 #include "lockstep/runtime/hash.h"
@@ -157,6 +159,7 @@ struct Coordinator::Impl {
   Writer<msg::FrameDone> done_writer;
   Writer<msg::CommandReply> reply_writer;
   Writer<msg::SpawnCheck> check_writer;
+  Writer<msg::ActorList> actors_writer;
   std::map<uint64_t, msg::SpawnCheckReply> check_replies;  // by request id
   uint64_t next_check = 0;
   bool checking = false;                       // the main loop waits for an owner's spawn check
@@ -551,7 +554,41 @@ struct Coordinator::Impl {
     batch.insert(batch.end(), client.begin(), client.end());
     t.commands(std::move(batch));
     open_tick = t;
+    ListActors(t);
     SendOpenTick(now);
+  }
+
+  // lockstep/actors: the spawns of the live actors, re-published when a tick changes them.
+  msg::ActorList actor_list;
+  void ListActors(const msg::Tick& t) {
+    bool changed = actor_list.run() != t.run() || actor_list.frame() == 0;
+    if (actor_list.run() != t.run()) actor_list.actors().clear();
+    auto& list = actor_list.actors();
+    for (const auto& c : t.commands()) {
+      const auto& b = c.body();
+      if (b._d() == msg::CommandKind::CMD_SPAWN_ACTOR) {
+        msg::ActorSpawned a;
+        a.spawn(b.spawn_actor());
+        a.frame(t.frame());
+        list.push_back(std::move(a));
+        changed = true;
+      } else if (b._d() == msg::CommandKind::CMD_DESTROY_ACTOR) {
+        std::vector<uint32_t> doomed{b.destroy_actor().actor()};  // children go with their parent
+        for (size_t i = 0; i < doomed.size(); ++i) {
+          for (const auto& a : list) {
+            if (a.spawn().parent() == doomed[i]) doomed.push_back(a.spawn().actor());
+          }
+        }
+        std::erase_if(list, [&](const msg::ActorSpawned& a) {
+          return std::find(doomed.begin(), doomed.end(), a.spawn().actor()) != doomed.end();
+        });
+        changed = true;
+      }
+    }
+    if (!changed) return;
+    actor_list.run(t.run());
+    actor_list.frame(t.frame());
+    Post(actors_writer, actor_list);
   }
 
   // Opens the barrier for open_tick and sends it. A re-send after a fault has the same
@@ -655,6 +692,7 @@ Coordinator::Coordinator(Bus& bus, LaunchConfig config) : impl_(std::make_unique
   s.done_writer = Writer<msg::FrameDone>(bus, topics::kFrameDone);
   s.reply_writer = Writer<msg::CommandReply>(bus, topics::kCommandReply);
   s.check_writer = Writer<msg::SpawnCheck>(bus, topics::kSpawnCheck);
+  s.actors_writer = Writer<msg::ActorList>(bus, topics::kActors);
   s.snapshot_writer = Writer<msg::ServiceSnapshot>(bus, topics::kSnapshot);
   {
     std::unique_lock<std::mutex> lock(s.mu);

@@ -71,7 +71,6 @@ bool Membership::OnAnnounce(const msg::ServiceAnnounce& a, Clock::time_point now
       spdlog::info("service '{}' ({}, pid {} on {}) joined at frame {} with {} blueprint(s)", name, m.kind, a.pid(),
                    a.host().to_string(), a.last_frame(), m.blueprints);
     }
-    m.ready = true;
     m.alive = true;
     m.failure.clear();
   } else {
@@ -80,7 +79,6 @@ bool Membership::OnAnnounce(const msg::ServiceAnnounce& a, Clock::time_point now
       spdlog::warn("service '{}' {}", name, m.failure);
     }
     changed = changed || m.alive;
-    m.ready = false;
     m.alive = false;
   }
   if (m.pid != a.pid()) changed = true;
@@ -118,8 +116,10 @@ bool Membership::OnAck(const std::string& service, uint32_t current_run, const m
     changed = true;
   }
   if (a.frame() >= m.last_frame) {
+    // A re-ack of the same frame without a hash (0 = none) keeps the hash we have: the
+    // tick log's last_hash is what a replacement checks its replay against.
+    if (a.frame() > m.last_frame || a.state_hash() != 0) m.last_hash = a.state_hash();
     m.last_frame = a.frame();
-    m.last_hash = a.state_hash();
     m.last_step_us = a.step_wall_us();
     m.replay_from = a.replay_from();
   }
@@ -135,7 +135,6 @@ bool Membership::OnBlueprints(const std::string& service, long count) {
   Member& m = members_[service];
   m.blueprints_received = count;
   if (m.ready_announced && !m.alive && m.stalled_frame == 0 && count == static_cast<long>(m.blueprints)) {
-    m.ready = true;
     m.alive = true;
     m.failure.clear();
     spdlog::info("service '{}' ({}, pid {} on {}) joined at frame {} with {} blueprint(s)", service, m.kind, m.pid, m.host,
@@ -164,7 +163,6 @@ bool Membership::CheckHeartbeats(Clock::time_point now) {
     if (process != ProcessState::kGone && now - m.last_heard <= heartbeat_timeout_) continue;
     if (process == ProcessState::kRunning && now - m.last_heard <= starved_timeout_) continue;
     m.alive = false;
-    m.ready = false;
     m.ready_announced = false;
     m.failure = "sent no heartbeat for " +
                 std::to_string(std::chrono::duration_cast<std::chrono::milliseconds>(now - m.last_heard).count()) +

@@ -449,12 +449,12 @@ struct Renderer::Impl {
     const std::uint32_t outputs = OutputFeatures(cam.outputs);
     if (!(cam.outputs & kOutColor)) {
       SetDrawBuffers(cam.outputs);
-      DrawPass(cam, world, l, shadow_vp, Programs(outputs), true);
+      DrawPass(cam, world, l, shadow_vp, Programs(outputs), true, !ClearToSky(cam.outputs));
     } else if (tuning.depth_prepass) {
       // Depth and the cheap outputs first; then the colour pass, depth test only, shades
       // each visible fragment once (llvmpipe tests depth before running the shader).
       SetDrawBuffers(cam.outputs & ~kOutColor);
-      DrawPass(cam, world, l, shadow_vp, Programs(outputs), true);
+      DrawPass(cam, world, l, shadow_vp, Programs(outputs), true, !ClearToSky(cam.outputs & ~kOutColor));
       SetDrawBuffers(kOutColor);
       glDepthMask(GL_FALSE);
       DrawPass(cam, world, l, shadow_vp, Programs(ColourFeatures(cam, l, shadow_vp.has_value())), false);
@@ -465,10 +465,24 @@ struct Renderer::Impl {
     }
   }
 
+  // For a pass without colour and flow (whose sky values are constants): clears the bound
+  // draw buffers to what the sky shader writes (labels: class Sky; depth: the far plane;
+  // normals: 0), so the pass need not draw the sky, a full-screen triangle. True if done.
+  bool ClearToSky(std::uint32_t outputs) const {
+    if (!tuning.sky_by_clear || (outputs & (kOutColor | kOutFlow))) return false;
+    const GLuint sky_label[4] = {11u, 0u, 0u, 0u};
+    const GLfloat far_depth[4] = {static_cast<GLfloat>(kFarPlane), 0, 0, 0}, zero[4] = {0, 0, 0, 0};
+    if (outputs & kOutLabels) glClearBufferuiv(GL_COLOR, 1, sky_label);
+    if (outputs & kOutDepth) glClearBufferfv(GL_COLOR, 2, far_depth);
+    if (outputs & kOutNormals) glClearBufferfv(GL_COLOR, 3, zero);
+    return true;
+  }
+
   // Draws the town, the actors and the sky with one program variant into the bound target.
-  // count: this pass's triangles go into the stats (one pass per camera counts).
+  // count: this pass's triangles go into the stats (one pass per camera counts); draw_sky:
+  // false where ClearToSky already wrote the sky.
   void DrawPass(const Camera& cam, const WorldView& world, const Lighting& l, const std::optional<Eigen::Matrix4f>& shadow_vp,
-                std::pair<gl::Program, gl::Program>& variant, bool count) {
+                std::pair<gl::Program, gl::Program>& variant, bool count, bool draw_sky = true) {
     const Eigen::Matrix4f proj = ProjectionMatrix(cam), view = ViewMatrix(cam.pose);
     const Pose prev_pose = cam.previous_pose.value_or(cam.pose);
     const Eigen::Matrix4f vp = proj * view, prev_vp = proj * ViewMatrix(prev_pose);
@@ -508,6 +522,7 @@ struct Renderer::Impl {
     stats.triangles += statics.Draw(fr, eye, false, tuning.front_to_back, &stats.draw_calls);
     DrawActors(world, fr);
     if (!count) stats.triangles = before;
+    if (!draw_sky) return;
     // Sky where nothing was drawn.
     glDisable(GL_CULL_FACE);
     sky.Use();

@@ -258,7 +258,10 @@ void main() {
 #endif
   vec3 color = albedo * light + emissive;
   vec3 h = normalize(u_sun_dir + view);
-  color += u_sun_color * (spec * lit) * pow(max(dot(n, h), 0.0), 40.0);
+  // Blinn-Phong exponent 40 by squaring: x^40 = x^32 x^8 (llvmpipe's pow is a log and an exp).
+  float nh = max(dot(n, h), 0.0);
+  float nh2 = nh * nh, nh4 = nh2 * nh2, nh8 = nh4 * nh4, nh16 = nh8 * nh8;
+  color += u_sun_color * (spec * lit) * (nh16 * nh16 * nh8);
 #ifdef FEATURE_PUDDLES
   if (mat == 5u && n.z > 0.7) {
     float nz = Noise(v_world.xy * 0.35) * 0.7 + Noise(v_world.xy * 1.3) * 0.3;

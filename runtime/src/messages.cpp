@@ -5,6 +5,9 @@
 #include <algorithm>
 #include <iterator>
 
+#include "lockstep/runtime/actor_list.h"
+
+#include "lockstep/msg/actorsPubSubTypes.h"
 #include "lockstep/msg/blueprintPubSubTypes.h"
 #include "lockstep/msg/clockPubSubTypes.h"
 #include "lockstep/msg/commandPubSubTypes.h"
@@ -38,6 +41,7 @@ namespace lockstep {
     return ops;                                                                               \
   }
 LOCKSTEP_MESSAGE_TYPES(LOCKSTEP_DEFINE_TYPE_OPS)
+LOCKSTEP_DEFINE_TYPE_OPS(ActorList)
 #undef LOCKSTEP_DEFINE_TYPE_OPS
 
 }  // namespace lockstep

@@ -5,8 +5,10 @@
 
 #include <atomic>
 #include <cmath>
+#include <condition_variable>
 #include <limits>
 #include <map>
+#include <optional>
 #include <mutex>
 #include <thread>
 
@@ -15,6 +17,7 @@
 #include "lockstep/client/client.h"
 #include "lockstep/client/multirotor.h"
 #include "lockstep/coordinator/coordinator.h"
+#include "lockstep/runtime/actor_list.h"
 
 namespace lockstep::client {
 namespace {
@@ -95,6 +98,40 @@ TEST_F(ClientTest, TickReturnsConsecutiveFramesAndTheirState) {
   ASSERT_TRUE(info.has_value());
   EXPECT_EQ(info->blueprint, "drone.generic_quad");
   EXPECT_EQ(info->kind, msg::ActorKind::ACTOR_DRONE);
+}
+
+// lockstep/actors: a reader that joins after the spawns gets every live actor's spawn
+// (attributes included), without the destroyed ones, from the coordinator's latest list.
+TEST_F(ClientTest, ALateReaderOfTheActorListGetsEveryLiveActorsSpawn) {
+  Start(true);
+  const uint32_t hero = client_->spawn("drone.generic_quad", MakePose(47.75, 1.75, 0), {{"role_name", "hero"}});
+  const uint32_t gone = client_->spawn("drone.generic_quad", MakePose(43.25, 1.75, 0), {{"role_name", "gone"}});
+  client_->tick();
+  client_->destroy(gone);
+  const uint64_t k = client_->tick();
+  std::mutex mu;
+  std::condition_variable cv;
+  std::optional<msg::ActorList> latest;
+  Reader<msg::ActorList> late(*bus_, topics::kActors, [&](const msg::ActorList& l, const SampleInfo&) {
+    std::lock_guard<std::mutex> lock(mu);
+    latest = l;
+    cv.notify_all();
+  });
+  std::unique_lock<std::mutex> lock(mu);
+  ASSERT_TRUE(cv.wait_for(lock, std::chrono::seconds(10), [&] { return latest.has_value(); })) << "no actor list";
+  EXPECT_EQ(latest->run(), client_->run());
+  EXPECT_EQ(latest->frame(), k);
+  ASSERT_EQ(latest->actors().size(), 1u);
+  const auto& a = latest->actors()[0];
+  EXPECT_EQ(a.spawn().actor(), hero);
+  EXPECT_EQ(a.spawn().blueprint().to_string(), "drone.generic_quad");
+  EXPECT_EQ(a.spawn().owner().to_string(), "air_sim");
+  std::string role;
+  for (const auto& at : a.spawn().attributes()) {
+    if (at.key().to_string() == "role_name") role = at.value().to_string();
+  }
+  EXPECT_EQ(role, "hero");
+  EXPECT_EQ(a.frame(), k - 1);
 }
 
 TEST_F(ClientTest, TickInFreeRunningModeRaisesTheCoordinatorsReason) {

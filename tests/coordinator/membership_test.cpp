@@ -221,6 +221,61 @@ TEST(Membership, AcksOfTheCurrentRunTrackTheLastFrameAndHash) {
   EXPECT_EQ(m.Find("air")->last_hash, 0xabcu);
 }
 
+// A re-sent tick is acked again; an ack without a hash (0 = none) must not erase the hash
+// acknowledged for that frame: the tick log hands it to a replacement to check its replay.
+TEST(Membership, AReAckWithoutAHashKeepsTheAcknowledgedHash) {
+  Membership m({"air"}, 600ms);
+  m.OnAck("air", 1, AckOf(1, 7, 0xabc));
+  m.OnAck("air", 1, AckOf(1, 7, 0));
+  EXPECT_EQ(m.Find("air")->last_frame, 7u);
+  EXPECT_EQ(m.Find("air")->last_hash, 0xabcu);
+  EXPECT_TRUE(m.Find("air")->divergence.empty());
+  // A newer frame without a hash: the service keeps none for it.
+  m.OnAck("air", 1, AckOf(1, 8, 0));
+  EXPECT_EQ(m.Find("air")->last_frame, 8u);
+  EXPECT_EQ(m.Find("air")->last_hash, 0u);
+}
+
+// Ready-state handling: only a READY announcement makes a member alive, and only one whose
+// declarations are here; STARTING and STOPPING never do, and a member declared dead needs a
+// new READY announcement before its declarations can revive it.
+TEST(Membership, OnlyAReadyAnnouncementWithItsDeclarationsMakesAMemberAlive) {
+  Membership m({"air"}, 600ms);
+  const auto t0 = Clock::now();
+  std::string who;
+  auto starting = Announce("air", msg::ServiceState::SERVICE_STARTING, 10);
+  starting.blueprints(2);
+  m.OnAnnounce(starting, t0);
+  EXPECT_FALSE(m.OnBlueprints("air", 2)) << "its set arrived while it was still starting";
+  EXPECT_FALSE(m.Find("air")->alive);
+  EXPECT_EQ(m.FirstMissing(&who), "has not announced ready");
+  auto ready = Announce("air", msg::ServiceState::SERVICE_READY, 10);
+  ready.blueprints(2);
+  EXPECT_TRUE(m.OnAnnounce(ready, t0 + 100ms)) << "READY with its set already here";
+  EXPECT_TRUE(m.Find("air")->alive);
+  EXPECT_TRUE(m.Find("air")->ready_announced);
+  // Back to STARTING (a re-join): not alive, and its set arriving again does not revive it.
+  EXPECT_TRUE(m.OnAnnounce(starting, t0 + 200ms));
+  EXPECT_FALSE(m.Find("air")->alive);
+  EXPECT_FALSE(m.Find("air")->ready_announced);
+  EXPECT_FALSE(m.OnBlueprints("air", 2));
+  EXPECT_FALSE(m.Find("air")->alive);
+  // READY again, then silence: dead, and no longer counted as having announced READY.
+  EXPECT_TRUE(m.OnAnnounce(ready, t0 + 300ms));
+  EXPECT_TRUE(m.CheckHeartbeats(t0 + 1s));
+  EXPECT_FALSE(m.Find("air")->ready_announced);
+  EXPECT_FALSE(m.OnBlueprints("air", 2));
+  // READY without its set: alive only once the set is here, and a set of another size is not it.
+  Membership n({"air"}, 600ms);
+  n.OnAnnounce(ready, t0);
+  EXPECT_FALSE(n.Find("air")->alive);
+  EXPECT_FALSE(n.OnBlueprints("air", 1));
+  EXPECT_FALSE(n.Find("air")->alive);
+  EXPECT_TRUE(n.OnBlueprints("air", 2));
+  EXPECT_TRUE(n.Find("air")->alive);
+  EXPECT_EQ(n.FirstMissing(&who), "");
+}
+
 TEST(Membership, AnAnnouncedShutdownIsAFailureWithItsReason) {
   Membership m({"air"}, 600ms);
   const auto t0 = Clock::now();

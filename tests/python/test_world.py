@@ -311,3 +311,45 @@ def test_six_sensors_over_500_ticks_deliver_every_frame_once_and_in_order(world,
         for s in sensors:
             s.stop()
             s.destroy()
+
+
+def test_a_client_that_joins_later_sees_the_actors_blueprints_and_attributes(world):
+    """Client A spawns; client B, another process started afterwards, finds the actor by
+    role_name in get_actors() (the coordinator's lockstep/actors list)."""
+    import subprocess
+    import sys
+    lib = world.get_blueprint_library()
+    bp = lib.find('drone.generic_quad')
+    bp.set_attribute('role_name', 'hero')
+    hero = world.spawn_actor(bp, carla.Transform(carla.Location(47.75, 5.25, 0.2)))
+    spawned = [hero]
+    if has_service('ground_sim'):
+        car_bp = lib.find('vehicle.tesla.model3')
+        car_bp.set_attribute('role_name', 'late_car')
+        car_bp.set_attribute('color', '10,20,30')
+        car = world.try_spawn_actor(car_bp, world.get_map().get_spawn_points()[3])
+        if car is not None:
+            spawned.append(car)
+    world.tick()
+    gone = world.spawn_actor(bp, carla.Transform(carla.Location(43.25, 5.25, 0.2)))
+    world.tick()
+    gone.destroy()
+    world.tick()
+    script = ("import carla\n"
+              "w = carla.Client('localhost', 2000).get_world()\n"
+              "for a in w.get_actors():\n"
+              "    print(a.id, a.type_id, a.attributes.get('role_name', ''), a.attributes.get('color', ''))\n")
+    try:
+        out = subprocess.run([sys.executable, '-c', script], capture_output=True, text=True, timeout=120)
+        assert out.returncode == 0, out.stderr
+        rows = [line.split(' ') for line in out.stdout.splitlines()]
+        heroes = [r for r in rows if r[2] == 'hero']
+        assert [(int(r[0]), r[1]) for r in heroes] == [(hero.id, 'drone.generic_quad')], out.stdout
+        assert str(gone.id) not in [r[0] for r in rows]
+        if len(spawned) > 1:
+            cars = [r for r in rows if r[2] == 'late_car']
+            assert [(int(r[0]), r[1], r[3]) for r in cars] == [(spawned[1].id, 'vehicle.tesla.model3', '10,20,30')]
+    finally:
+        for a in spawned:
+            a.destroy()
+        world.tick()

@@ -14,7 +14,8 @@ namespace {
 using namespace testing;
 
 // Three frames of a street at noon (sun shadows) with a car driving past a walker and a
-// drone, seen by a camera that moves too; every output requested.
+// drone, seen by a camera that moves too: every output requested, then the same view
+// without flow and without colour and flow (passes that clear to the sky instead of drawing it).
 std::vector<CameraFrame> Sequence(Renderer& r, const RenderTuning& tuning) {
   r.SetTuning(tuning);
   std::vector<CameraFrame> out;
@@ -27,7 +28,11 @@ std::vector<CameraFrame> Sequence(Renderer& r, const RenderTuning& tuning) {
   w.actors.push_back(Drone(r, 12, At(20, 1, 4)));
   Camera cam = Cam(160, 120, 90, At(0, 0, 2.0, 5, -8), kOutColor | kOutLabels | kOutDepth | kOutNormals | kOutFlow);
   for (int f = 0; f < 3; ++f) {
-    out.push_back(r.RenderFrames({cam}, w)[0]);
+    Camera no_flow = cam, no_colour = cam;
+    no_flow.outputs &= ~static_cast<std::uint32_t>(kOutFlow);
+    no_colour.outputs = kOutLabels | kOutDepth | kOutNormals;
+    no_colour.pose.position.y() += 0.5;  // not the same pose: a pass of its own
+    for (const CameraFrame& c : r.RenderFrames({cam, no_flow, no_colour}, w)) out.push_back(c);
     cam.previous_pose = cam.pose;
     cam.pose.position.x() += 5;  // the shadow box moves (8 m steps) between frames 0 and 1
     for (auto& a : w.actors) {
@@ -56,13 +61,13 @@ void ExpectSame(const CameraFrame& a, const CameraFrame& b, const std::string& w
 TEST(Tuning, SpeedUpsDoNotChangeWhatACameraSees) {
   Renderer& r = SharedRenderer();
   const auto fast = Sequence(r, RenderTuning{});
-  RenderTuning none{false, false, false, false};
+  RenderTuning none{false, false, false, false, false};
   const auto slow = Sequence(r, none);
   for (std::size_t f = 0; f < fast.size(); ++f) ExpectSame(slow[f], fast[f], "all speed-ups off, frame " + std::to_string(f));
-  const char* names[] = {"output_variants", "depth_prepass", "front_to_back", "static_shadow_cache"};
-  for (int k = 0; k < 4; ++k) {
+  const char* names[] = {"output_variants", "depth_prepass", "front_to_back", "static_shadow_cache", "sky_by_clear"};
+  for (int k = 0; k < 5; ++k) {
     RenderTuning t;
-    bool* flags[] = {&t.output_variants, &t.depth_prepass, &t.front_to_back, &t.static_shadow_cache};
+    bool* flags[] = {&t.output_variants, &t.depth_prepass, &t.front_to_back, &t.static_shadow_cache, &t.sky_by_clear};
     *flags[k] = false;
     const auto one_off = Sequence(r, t);
     for (std::size_t f = 0; f < fast.size(); ++f) ExpectSame(one_off[f], fast[f], std::string(names[k]) + " off, frame " + std::to_string(f));

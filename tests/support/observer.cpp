@@ -45,6 +45,10 @@ bool Observer::WaitUntil(const std::function<bool()>& pred, std::chrono::millise
   }
 }
 
+bool Observer::WaitConnected(std::chrono::milliseconds timeout) {
+  return WaitUntil([&] { return commands_.MatchedReaders() > 0 && reply_reader_.MatchedWriters() > 0; }, timeout);
+}
+
 uint64_t Observer::Send(msg::CommandBody body) {
   msg::Command c;
   c.client(client_);

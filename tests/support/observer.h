@@ -22,6 +22,10 @@ class Observer {
   // Waits until `pred` holds (checked on every sample); false on timeout.
   bool WaitUntil(const std::function<bool()>& pred, std::chrono::milliseconds timeout);
 
+  // Waits until the command writer and the reply reader matched the coordinator's
+  // endpoints (a command written before that is lost: the topic is VOLATILE).
+  bool WaitConnected(std::chrono::milliseconds timeout);
+
   // Sends a command; returns its sequence number.
   uint64_t Send(msg::CommandBody body);
   std::optional<msg::CommandReply> WaitReply(uint64_t sequence, std::chrono::milliseconds timeout);

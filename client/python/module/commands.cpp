@@ -6,6 +6,8 @@
 #include <map>
 #include <set>
 #include <string>
+#include <tuple>
+#include <vector>
 
 namespace lockstep::python {
 
@@ -105,6 +107,30 @@ const std::map<std::string, msg::TrafficManagerParameter> kTmParameters = {
     {"auto_lane_change", msg::TrafficManagerParameter::TM_AUTO_LANE_CHANGE},
     {"hybrid_physics_radius", msg::TrafficManagerParameter::TM_HYBRID_PHYSICS_RADIUS},
     {"random_seed", msg::TrafficManagerParameter::TM_RANDOM_SEED},
+    {"desired_speed", msg::TrafficManagerParameter::TM_DESIRED_SPEED},
+    {"keep_right_rule_percentage", msg::TrafficManagerParameter::TM_KEEP_RIGHT_RULE_PERCENTAGE},
+    {"random_left_lanechange_percentage", msg::TrafficManagerParameter::TM_RANDOM_LEFT_LANECHANGE_PERCENTAGE},
+    {"random_right_lanechange_percentage", msg::TrafficManagerParameter::TM_RANDOM_RIGHT_LANECHANGE_PERCENTAGE},
+    {"force_lane_change", msg::TrafficManagerParameter::TM_FORCE_LANE_CHANGE},
+    {"set_path", msg::TrafficManagerParameter::TM_SET_PATH},
+    {"set_route", msg::TrafficManagerParameter::TM_SET_ROUTE},
+    {"hybrid_physics_mode", msg::TrafficManagerParameter::TM_HYBRID_PHYSICS_MODE},
+    {"respawn_dormant_vehicles", msg::TrafficManagerParameter::TM_RESPAWN_DORMANT_VEHICLES},
+};
+
+const std::map<std::string, msg::ActorPhysicsKind> kPhysicsKinds = {
+    {"set_target_velocity", msg::ActorPhysicsKind::PHYSICS_SET_TARGET_VELOCITY},
+    {"set_target_angular_velocity", msg::ActorPhysicsKind::PHYSICS_SET_TARGET_ANGULAR_VELOCITY},
+    {"add_impulse", msg::ActorPhysicsKind::PHYSICS_ADD_IMPULSE},
+    {"set_simulate_physics", msg::ActorPhysicsKind::PHYSICS_SET_SIMULATE_PHYSICS},
+    {"set_light_state", msg::ActorPhysicsKind::PHYSICS_SET_LIGHT_STATE},
+};
+
+const std::map<std::string, msg::WalkerAIKind> kWalkerAIKinds = {
+    {"start", msg::WalkerAIKind::WALKER_AI_START},
+    {"stop", msg::WalkerAIKind::WALKER_AI_STOP},
+    {"go_to_location", msg::WalkerAIKind::WALKER_AI_GO_TO_LOCATION},
+    {"set_max_speed", msg::WalkerAIKind::WALKER_AI_SET_MAX_SPEED},
 };
 
 }  // namespace
@@ -190,8 +216,55 @@ msg::CommandBody CommandFromDict(const py::dict& d) {
     msg::TrafficManagerCommand x;
     x.parameter(EnumOf(f.Need<std::string>("parameter"), kTmParameters, "traffic manager parameter"));
     x.actor(f.Get<uint32_t>("actor", 0));
-    x.value(f.Need<double>("value"));
+    x.value(f.Get<double>("value", 0));
+    if (f.Has("path")) {
+      for (const auto& [px, py_, pz] : f.Get<std::vector<std::tuple<double, double, double>>>("path", {})) {
+        msg::Vector3 v;
+        v.x(px);
+        v.y(py_);
+        v.z(pz);
+        x.path().push_back(v);
+      }
+      if (x.path().size() > 256) throw py::value_error("command 'traffic_manager': a path has at most 256 locations");
+    }
+    if (f.Has("route")) {
+      const auto route = f.Get<std::vector<std::string>>("route", {});
+      if (route.size() > 64) throw py::value_error("command 'traffic_manager': a route has at most 64 entries");
+      for (const auto& r : route) {
+        if (r.size() > 16) throw py::value_error("command 'traffic_manager': route entry '" + r + "' is longer than 16");
+        x.route().push_back(r);
+      }
+    }
     b.traffic_manager(x);
+  } else if (type == "ackermann") {
+    msg::VehicleAckermannControl x;
+    x.actor(f.Need<uint32_t>("actor"));
+    x.steer(f.Get<float>("steer", 0));
+    x.steer_speed(f.Get<float>("steer_speed", 0));
+    x.speed(f.Get<float>("speed", 0));
+    x.acceleration(f.Get<float>("acceleration", 0));
+    x.jerk(f.Get<float>("jerk", 0));
+    b.ackermann(x);
+  } else if (type == "actor_physics") {
+    msg::ActorPhysicsCommand x;
+    x.actor(f.Need<uint32_t>("actor"));
+    x.kind(EnumOf(f.Need<std::string>("kind"), kPhysicsKinds, "actor physics kind"));
+    x.value(f.Vec3("value"));
+    x.enabled(f.Get<bool>("enabled", false));
+    x.light_state(f.Get<uint32_t>("light_state", 0));
+    b.actor_physics(x);
+  } else if (type == "vehicle_physics") {
+    msg::VehiclePhysicsCommand x;
+    x.actor(f.Need<uint32_t>("actor"));
+    x.physics(PhysicsFromDict(f.Need<py::dict>("physics")));
+    b.vehicle_physics(x);
+  } else if (type == "walker_ai") {
+    msg::WalkerAICommand x;
+    x.actor(f.Need<uint32_t>("actor"));
+    x.kind(EnumOf(f.Need<std::string>("kind"), kWalkerAIKinds, "walker AI kind"));
+    x.location(f.Vec3("location"));
+    x.max_speed(f.Get<double>("max_speed", 0));
+    b.walker_ai(x);
   } else if (type == "drone") {
     msg::DroneCommand x;
     x.actor(f.Need<uint32_t>("actor"));
@@ -209,7 +282,7 @@ msg::CommandBody CommandFromDict(const py::dict& d) {
   } else {
     throw py::value_error("unknown command type '" + type +
                           "' (spawn, destroy, set_transform, vehicle_control, walker_control, traffic_light, "
-                          "traffic_manager, drone)");
+                          "traffic_manager, drone, ackermann, actor_physics, vehicle_physics, walker_ai)");
   }
   f.CheckAllUsed();
   return b;

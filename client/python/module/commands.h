@@ -21,3 +21,12 @@ py::tuple PoseToTuple(const msg::Pose& p);
 py::tuple Vec(const msg::Vector3& v);
 
 }  // namespace lockstep::python
+
+namespace lockstep::python {
+
+// VehiclePhysicsControl <-> {"torque_curve": [(rpm, Nm)...], "forward_gears": [(ratio, down, up)...],
+// "center_of_mass": (x, y, z), every other field by its wire name}; SI units, world ENU body frame.
+msg::VehiclePhysicsControl PhysicsFromDict(const py::dict& d);
+py::dict PhysicsToDict(const msg::VehiclePhysicsControl& p);
+
+}  // namespace lockstep::python

@@ -10,6 +10,7 @@
 #include <memory>
 
 #include "commands.h"
+#include "map_queries.h"
 #include "lockstep/client/client.h"
 #include "lockstep/client/multirotor.h"
 #include "lockstep/map/map.h"
@@ -134,6 +135,10 @@ py::object StateOf(const Snapshot& s, uint32_t id) {
     d["autopilot"] = v->autopilot();
     d["speed_limit"] = v->speed_limit();
     d["traffic_light"] = v->traffic_light();
+    d["light_state"] = v->light_state();
+    d["kinematic"] = v->kinematic();
+    d["gear"] = v->gear();
+    d["role_name"] = v->role_name().to_string();
   } else if (const auto* w = s.Walker(id)) {
     d["ai_controlled"] = w->ai_controlled();
   } else if (const auto* l = s.TrafficLight(id)) {
@@ -381,14 +386,17 @@ PYBIND11_MODULE(_lockstep, m) {
       .def_readonly("id", &map::Waypoint::id)
       .def_readonly("lane_width", &map::Waypoint::lane_width)
       .def_readonly("junction", &map::Waypoint::junction)
+      .def_readonly("road_xodr", &map::Waypoint::road_id)
+      .def_readonly("junction_xodr", &map::Waypoint::junction_id)
       .def_property_readonly("lane_type", [](const map::Waypoint& w) { return static_cast<int>(w.lane_type); })
       .def_property_readonly("pose", [](const map::Waypoint& w) {
         const auto& t = w.transform;
         return py::make_tuple(t.location.x(), t.location.y(), t.location.z(), t.yaw, t.pitch, t.roll);
       });
 
-  py::class_<map::Map, std::shared_ptr<map::Map>>(m, "Map")
-      .def_property_readonly("name", &map::Map::Name)
+  py::class_<map::Map, std::shared_ptr<map::Map>> map_class(m, "Map");
+  python::AddMapQueries(map_class);
+  map_class.def_property_readonly("name", &map::Map::Name)
       .def(
           "waypoint",
           [](const map::Map& mp, double x, double y, double z, bool project, int types) {
@@ -498,16 +506,27 @@ PYBIND11_MODULE(_lockstep, m) {
            py::call_guard<py::gil_scoped_release>())
       .def(
           "submit",
-          [](Client& c, const py::dict& d, bool throw_if_rejected) {
+          [](Client& c, const py::dict& d, bool throw_if_rejected, const std::string& watch) {
             msg::CommandBody b = python::CommandFromDict(d);
             msg::CommandReply r;
             {
               py::gil_scoped_release release;
-              r = c.Submit(std::move(b), throw_if_rejected);
+              r = watch.empty() ? c.Submit(std::move(b), throw_if_rejected) : c.SubmitWatched(std::move(b), watch);
             }
             return py::make_tuple(r.accepted(), r.reason().to_string(), r.actor(), r.frame());
           },
-          py::arg("command"), py::arg("throw_if_rejected") = true)
+          py::arg("command"), py::arg("throw_if_rejected") = true, py::arg("watch") = "",
+          "Sends a command dict and waits for the coordinator's reply. With `watch` (the call's name), a failure "
+          "where the owning service applies it is raised by a later tick() / wait_for_tick() / check_failures()")
+      .def("watch",
+           [](Client& c, uint32_t actor, uint64_t frame, const std::string& call) { c.watch(actor, c.run(), frame, call); })
+      .def("check_failures", &Client::check_failures)
+      .def("vehicle_physics",
+           [](const Client& c, uint32_t id) -> py::object {
+             auto p = c.physics_control(id);
+             if (!p) return py::none();
+             return python::PhysicsToDict(*p);
+           })
       .def("submit_batch",
            [](Client& c, const py::list& list) {
              std::vector<msg::CommandBody> bodies;

@@ -162,6 +162,31 @@ class Client {
                                     std::string* reason = nullptr);
   void destroy(uint32_t actor);
 
+  // --- commands the owning service may still refuse ---
+  // A command the coordinator accepted can still fail where it is applied (ground_sim
+  // refuses a physics control whose wheel radius is too small, an impulse on a car whose
+  // physics is off): the service reports it as an EVENT_COMMAND_FAILED for the actor in
+  // the frame whose tick carried the command. A watched command's failure is thrown as
+  // CommandRejected (named by `call`, with the service's reason) by the next tick(),
+  // wait_for_tick() or check_failures() that sees it: in synchronous mode the tick that
+  // applies it, or the one after if the event arrives late.
+  msg::CommandReply SubmitWatched(msg::CommandBody body, const std::string& call);
+  void watch(uint32_t actor, uint32_t run, uint64_t frame, const std::string& call);
+  // Throws CommandRejected for the first watched command whose failure has arrived.
+  void check_failures();
+
+  // --- ground actors (ground_sim; each is SubmitWatched) ---
+  void apply_ackermann_control(const msg::VehicleAckermannControl& control);
+  // set_target_velocity, set_target_angular_velocity, add_impulse, set_simulate_physics,
+  // set_light_state (ActorPhysicsCommand.kind).
+  void apply_actor_physics(const msg::ActorPhysicsCommand& command);
+  void apply_physics_control(uint32_t actor, const msg::VehiclePhysicsControl& physics);
+  // The vehicle's physics as ground_sim reports it in the latest GroundState (a change
+  // shows from the frame that applied it); nullopt if no state lists the vehicle.
+  std::optional<msg::VehiclePhysicsControl> physics_control(uint32_t actor) const;
+  // controller.ai.walker: start, stop, go_to_location, set_max_speed (WalkerAICommand.kind).
+  void walker_ai(const msg::WalkerAICommand& command);
+
   // --- what exists ---
   // The union of the services' blueprint declarations (lockstep/blueprints); waits up
   // to `wait_s` for the first declarations.
@@ -204,5 +229,7 @@ class Client {
 int DefaultDomain();
 const char* CommandKindName(msg::CommandKind kind);
 const char* DroneStatusName(msg::DroneCommandStatus status);
+// The actor a command is about (0 for world commands).
+uint32_t CommandActor(const msg::CommandBody& body);
 
 }  // namespace lockstep::client

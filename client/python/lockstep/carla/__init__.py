@@ -10,6 +10,7 @@ from .blueprints import *  # noqa: F401,F403
 from .errors import LockstepUnsupported  # noqa: F401
 from .geometry import *  # noqa: F401,F403
 from .map import *  # noqa: F401,F403
+from .physics import *  # noqa: F401,F403
 from .sensor_data import *  # noqa: F401,F403
 from .world import *  # noqa: F401,F403
 

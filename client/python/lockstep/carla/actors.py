@@ -6,11 +6,14 @@ import threading
 from .errors import unsupported
 from .geometry import (BoundingBox, Location, Transform, Vector3D, from_enu_vector, from_wire_pose, to_enu_vector,
                        to_wire_pose)
+from .physics import VehicleAckermannControl  # noqa: F401 (carla.VehicleAckermannControl)
+from .physics import from_wire as _physics_from_wire
+from .physics import to_wire as _physics_to_wire
 from .sensor_data import make_sensor_data
 
 __all__ = ['VehicleControl', 'WalkerControl', 'TrafficLightState', 'AttachmentType', 'ActorState', 'Actor', 'Vehicle',
            'Walker', 'TrafficLight', 'Sensor', 'ServerSideSensor', 'WalkerAIController', 'ActorList', 'make_actor',
-           'VehicleLightState', 'VehicleDoor', 'VehicleWheelLocation']
+           'VehicleLightState', 'VehicleDoor', 'VehicleWheelLocation', 'VehicleAckermannControl']
 
 
 class VehicleControl:
@@ -188,20 +191,51 @@ class Actor:
         t = self.get_transform()
         self.set_transform(Transform(location, t.rotation))
 
+    # --- physics (ground_sim's actors; a failure there is raised by the next world.tick()) ---
+    def _physics(self, call, kind, **kw):
+        self._world._require('ground_sim', call)
+        cmd = {'type': 'actor_physics', 'actor': self.id, 'kind': kind}
+        cmd.update(kw)
+        self._world._client.submit(cmd, watch=call)
+
     def set_simulate_physics(self, enabled=True):
-        unsupported('Actor.set_simulate_physics', 'physics cannot be switched off per actor on the wire')
+        self._physics('Actor.set_simulate_physics', 'set_simulate_physics', enabled=bool(enabled))
 
     def set_enable_gravity(self, enabled):
         unsupported('Actor.set_enable_gravity', 'gravity cannot be switched off per actor on the wire')
 
     def add_impulse(self, impulse):
-        unsupported('Actor.add_impulse', 'no impulse command on the wire')
+        """N s, world (CARLA's frame), applied at the next tick."""
+        self._physics('Actor.add_impulse', 'add_impulse', value=to_enu_vector(impulse))
 
     def add_force(self, force):
-        unsupported('Actor.add_force', 'no force command on the wire')
+        """N, world: ground_sim has no force command; the force acts for one tick, as
+        CARLA's does for one physics step: the impulse force x fixed_delta_seconds."""
+        dt = self._world._dt()
+        self._physics('Actor.add_force', 'add_impulse', value=tuple(c * dt for c in to_enu_vector(force)))
+
+    def add_angular_impulse(self, angular_impulse):
+        unsupported('Actor.add_angular_impulse', 'ground_sim takes no angular impulse; use set_target_angular_velocity')
+
+    def add_torque(self, torque):
+        unsupported('Actor.add_torque', 'ground_sim takes no torque; use set_target_angular_velocity')
 
     def set_target_velocity(self, velocity):
-        unsupported('Actor.set_target_velocity', 'no velocity command on the wire for ground actors')
+        """m/s, world (CARLA's frame), set at the next tick."""
+        self._physics('Actor.set_target_velocity', 'set_target_velocity', value=to_enu_vector(velocity))
+
+    def set_target_angular_velocity(self, angular_velocity):
+        """deg/s, world (CARLA's frame and sense, as get_angular_velocity returns it)."""
+        w = angular_velocity
+        self._physics('Actor.set_target_angular_velocity', 'set_target_angular_velocity',
+                      value=(math.radians(w.x), -math.radians(w.y), -math.radians(w.z)))
+
+    def enable_constant_velocity(self, velocity):
+        unsupported('Actor.enable_constant_velocity', 'ground_sim has no constant-velocity mode; call '
+                    'set_target_velocity every tick')
+
+    def disable_constant_velocity(self):
+        unsupported('Actor.disable_constant_velocity', 'ground_sim has no constant-velocity mode')
 
     def destroy(self):
         if self._destroyed:
@@ -250,20 +284,41 @@ class Vehicle(Actor):
     def is_at_traffic_light(self):
         return self.get_traffic_light() is not None
 
+    def _physics_wire(self, call):
+        self._world._require('ground_sim', call)
+        d = self._world._client.vehicle_physics(self.id)
+        if d is None:
+            raise RuntimeError('%s: vehicle %d has no state yet (tick once after spawning it)' % (call, self.id))
+        return d
+
     def get_physics_control(self):
-        unsupported('Vehicle.get_physics_control', 'vehicle physics parameters are not exposed over the wire')
+        """What ground_sim reports in the latest GroundState: a control applied in
+        synchronous mode shows after the tick that applies it (CARLA: at once)."""
+        s = self._state()
+        return _physics_from_wire(self._physics_wire('Vehicle.get_physics_control'), from_wire_pose(s['transform']),
+                                  s['half_extents'])
 
     def apply_physics_control(self, physics_control):
-        unsupported('Vehicle.apply_physics_control', 'vehicle physics parameters are not exposed over the wire')
+        call = 'Vehicle.apply_physics_control'
+        d = _physics_to_wire(physics_control, self._physics_wire(call), call)
+        self._world._client.submit({'type': 'vehicle_physics', 'actor': self.id, 'physics': d}, watch=call)
 
     def set_light_state(self, light_state):
-        unsupported('Vehicle.set_light_state', 'vehicle lights are not simulated')
+        self._physics('Vehicle.set_light_state', 'set_light_state', light_state=int(light_state) & 0xFFFFFFFF)
 
     def get_light_state(self):
-        return VehicleLightState.NONE
+        s = self._state()
+        return s.get('light_state', VehicleLightState.NONE) if s else VehicleLightState.NONE
 
     def apply_ackermann_control(self, control):
-        unsupported('Vehicle.apply_ackermann_control', 'the wire carries throttle/steer/brake control only')
+        self._world._require('ground_sim', 'Vehicle.apply_ackermann_control')
+        self._world._client.submit(dict(control._wire(), actor=self.id), watch='Vehicle.apply_ackermann_control')
+
+    def get_ackermann_controller_settings(self):
+        unsupported('Vehicle.get_ackermann_controller_settings', "ground_sim's Ackermann controller has fixed gains")
+
+    def apply_ackermann_controller_settings(self, settings):
+        unsupported('Vehicle.apply_ackermann_controller_settings', "ground_sim's Ackermann controller has fixed gains")
 
     def open_door(self, door):
         unsupported('Vehicle.open_door', 'doors are not simulated')
@@ -289,18 +344,25 @@ class Walker(Actor):
 
 
 class WalkerAIController(Actor):
+    """controller.ai.walker, spawned attached to its walker; ground_sim walks it."""
+
+    def _ai(self, call, kind, **kw):
+        self._world._require('ground_sim', call)
+        cmd = {'type': 'walker_ai', 'actor': self.id, 'kind': kind}
+        cmd.update(kw)
+        self._world._client.submit(cmd, watch=call)
+
     def start(self):
-        unsupported('WalkerAIController.start', 'there is no walker-AI command on the wire yet; '
-                    'drive walkers with Walker.apply_control')
+        self._ai('WalkerAIController.start', 'start')
 
     def go_to_location(self, location):
-        unsupported('WalkerAIController.go_to_location', 'there is no walker-AI command on the wire yet')
+        self._ai('WalkerAIController.go_to_location', 'go_to_location', location=to_enu_vector(location))
 
-    def set_max_speed(self, speed):
-        unsupported('WalkerAIController.set_max_speed', 'there is no walker-AI command on the wire yet')
+    def set_max_speed(self, speed=1.4):
+        self._ai('WalkerAIController.set_max_speed', 'set_max_speed', max_speed=float(speed))
 
     def stop(self):
-        unsupported('WalkerAIController.stop', 'there is no walker-AI command on the wire yet')
+        self._ai('WalkerAIController.stop', 'stop')
 
 
 class TrafficLight(Actor):
@@ -362,6 +424,35 @@ class TrafficLight(Actor):
 
     def get_pole_index(self):
         return 0
+
+    def get_stop_waypoints(self):
+        """One waypoint per controlled lane, at its stop line (from the map's signal)."""
+        return self._world.get_map()._stop_waypoints(self.get_opendrive_id())
+
+    def get_affected_lane_waypoints(self):
+        """CARLA's: for every landmark of this light's signal (the signal and its
+        references), a waypoint at the landmark's s on each lane its validities name."""
+        m = self._world.get_map()
+        out = []
+        for l in m.get_all_landmarks_from_id(self.get_opendrive_id()):
+            for a, b in l.get_lane_validities():
+                step = 1 if a <= b else -1
+                for lane in range(a, b + step, step):
+                    w = m.get_waypoint_xodr(l.road_id, lane, l.s) if lane != 0 else None
+                    if w is not None:
+                        out.append(w)
+        return out
+
+    @property
+    def trigger_volume(self):
+        """carla.TrafficSign.trigger_volume: where an approaching vehicle reacts (3 m of
+        the controlled lanes before the stop line), in the light's frame, as CARLA."""
+        box = self._world.get_map()._trigger_volume(self.get_opendrive_id())
+        if box is None:
+            return BoundingBox()
+        (x, y, z), extent, _ = box
+        local = self.get_transform().inverse_transform(Location(x, -y, z))
+        return BoundingBox(Location(local.x, local.y, local.z), Vector3D(*extent))
 
     def reset_group(self):
         unsupported('TrafficLight.reset_group', 'no group reset command on the wire')

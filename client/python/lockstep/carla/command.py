@@ -1,8 +1,13 @@
 """carla.command: batch commands for Client.apply_batch / apply_batch_sync."""
-from .geometry import to_wire_pose
+import math
+
+from .errors import unsupported
+from .geometry import to_enu_vector, to_wire_pose
 
 __all__ = ['Response', 'FutureActor', 'SpawnActor', 'DestroyActor', 'ApplyVehicleControl', 'ApplyWalkerControl',
-           'ApplyTransform', 'ApplyLocation', 'SetAutopilot', 'SetSimulatePhysics', 'ApplyVehicleAckermannControl']
+           'ApplyTransform', 'ApplyLocation', 'SetAutopilot', 'SetSimulatePhysics', 'ApplyVehicleAckermannControl',
+           'ApplyImpulse', 'ApplyForce', 'ApplyTargetVelocity', 'ApplyTargetAngularVelocity', 'SetVehicleLightState',
+           'ApplyVehiclePhysicsControl', 'SetEnableGravity', 'ApplyTorque', 'ApplyAngularImpulse']
 
 FutureActor = 0  # a SpawnActor's .then() commands refer to the actor it spawns
 
@@ -85,13 +90,124 @@ class SetAutopilot(_Command):
                 'value': 1.0 if self.enabled else 0.0}
 
 
-class SetSimulatePhysics(_Command):
+class _Physics(_Command):
+    """An actor physics command (ground_sim); its failure there is raised by the next tick."""
+    _kind = None
+
+    def _extra(self):
+        return {}
+
+    def to_dict(self, actor=0):
+        d = {'type': 'actor_physics', 'actor': self.actor_id or actor, 'kind': self._kind}
+        d.update(self._extra())
+        return d
+
+
+class SetSimulatePhysics(_Physics):
+    _kind, _watch = 'set_simulate_physics', 'command.SetSimulatePhysics'
+
     def __init__(self, actor, enabled):
-        from .errors import unsupported
-        unsupported('command.SetSimulatePhysics', 'physics cannot be switched off per actor on the wire')
+        self.actor_id, self.enabled = _id(actor), bool(enabled)
+
+    def _extra(self):
+        return {'enabled': self.enabled}
+
+
+class ApplyImpulse(_Physics):
+    _kind, _watch = 'add_impulse', 'command.ApplyImpulse'
+
+    def __init__(self, actor, impulse):
+        self.actor_id, self.impulse = _id(actor), impulse
+
+    def _extra(self):
+        return {'value': to_enu_vector(self.impulse)}
+
+
+class ApplyForce(_Physics):
+    """ground_sim has no force: the impulse force x fixed_delta_seconds (one tick), set by
+    Client.apply_batch*."""
+    _kind, _watch = 'add_impulse', 'command.ApplyForce'
+
+    def __init__(self, actor, force):
+        self.actor_id, self.force = _id(actor), force
+        self._dt = None
+
+    def _extra(self):
+        if self._dt is None:
+            raise RuntimeError('command.ApplyForce: run it through Client.apply_batch / apply_batch_sync')
+        return {'value': tuple(c * self._dt for c in to_enu_vector(self.force))}
+
+
+class ApplyTargetVelocity(_Physics):
+    _kind, _watch = 'set_target_velocity', 'command.ApplyTargetVelocity'
+
+    def __init__(self, actor, velocity):
+        self.actor_id, self.velocity = _id(actor), velocity
+
+    def _extra(self):
+        return {'value': to_enu_vector(self.velocity)}
+
+
+class ApplyTargetAngularVelocity(_Physics):
+    _kind, _watch = 'set_target_angular_velocity', 'command.ApplyTargetAngularVelocity'
+
+    def __init__(self, actor, angular_velocity):
+        self.actor_id, self.angular_velocity = _id(actor), angular_velocity
+
+    def _extra(self):
+        w = self.angular_velocity
+        return {'value': (math.radians(w.x), -math.radians(w.y), -math.radians(w.z))}
+
+
+class SetVehicleLightState(_Physics):
+    _kind, _watch = 'set_light_state', 'command.SetVehicleLightState'
+
+    def __init__(self, actor, light_state):
+        self.actor_id, self.light_state = _id(actor), int(light_state) & 0xFFFFFFFF
+
+    def _extra(self):
+        return {'light_state': self.light_state}
 
 
 class ApplyVehicleAckermannControl(_Command):
+    _watch = 'command.ApplyVehicleAckermannControl'
+
     def __init__(self, actor, control):
-        from .errors import unsupported
-        unsupported('command.ApplyVehicleAckermannControl', 'the wire carries throttle/steer/brake control only')
+        self.actor_id, self.control = _id(actor), control
+
+    def to_dict(self, actor=0):
+        return dict(self.control._wire(), actor=self.actor_id or actor)
+
+
+class ApplyVehiclePhysicsControl(_Command):
+    """The physics of a vehicle spawned earlier (its current values fill what the control
+    leaves to ground_sim); set by Client.apply_batch*."""
+    _watch = 'command.ApplyVehiclePhysicsControl'
+
+    def __init__(self, actor, physics_control):
+        self.actor_id, self.physics_control = _id(actor), physics_control
+        self._current = None
+
+    def to_dict(self, actor=0):
+        if self._current is None:
+            raise RuntimeError('command.ApplyVehiclePhysicsControl: run it through Client.apply_batch / '
+                               'apply_batch_sync, for a vehicle that has a state')
+        from .physics import to_wire
+        return {'type': 'vehicle_physics', 'actor': self.actor_id or actor,
+                'physics': to_wire(self.physics_control, self._current, self._watch)}
+
+
+class SetEnableGravity(_Command):
+    def __init__(self, actor, enabled):
+        unsupported('command.SetEnableGravity', 'gravity cannot be switched off per actor on the wire')
+
+
+class ApplyTorque(_Command):
+    def __init__(self, actor, torque):
+        unsupported('command.ApplyTorque', 'ground_sim takes no torque; use ApplyTargetAngularVelocity')
+
+
+class ApplyAngularImpulse(_Command):
+    def __init__(self, actor, impulse):
+        unsupported('command.ApplyAngularImpulse', 'ground_sim takes no angular impulse; use '
+                    'ApplyTargetAngularVelocity')

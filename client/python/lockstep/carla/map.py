@@ -3,9 +3,10 @@
 import math
 
 from .errors import unsupported
-from .geometry import Location, Rotation, Transform
+from .geometry import BoundingBox, GeoLocation, Location, Rotation, Transform, Vector3D
 
-__all__ = ['LaneType', 'LaneChange', 'LaneMarkingType', 'LaneMarkingColor', 'LaneMarking', 'Waypoint', 'Map']
+__all__ = ['LaneType', 'LaneChange', 'LaneMarkingType', 'LaneMarkingColor', 'LaneMarking', 'Waypoint', 'Map',
+           'Junction', 'Landmark', 'LandmarkOrientation', 'LandmarkType']
 
 
 class LaneType:
@@ -94,6 +95,115 @@ class LaneMarking:
         return 'LaneMarking(type=%s, width=%g)' % (self.type, self.width)
 
 
+def _xodr_id(text):
+    """An OpenDRIVE id as CARLA gives it: an int (ids of CARLA's towns are numbers)."""
+    try:
+        return int(text)
+    except ValueError:
+        return text
+
+
+class LandmarkOrientation:
+    Positive = 0
+    Negative = 1
+    Both = 2
+
+
+class LandmarkType:
+    """CARLA's OpenDRIVE signal type codes (strings, as in the file)."""
+    Danger = '101'
+    LanesMerging = '121'
+    CautionPedestrian = '133'
+    CautionBicycle = '138'
+    LevelCrossing = '150'
+    StopSign = '206'
+    YieldSign = '205'
+    MandatoryTurnDirection = '209'
+    MandatoryLeftRightDirection = '211'
+    TwoChoiceTurnDirection = '214'
+    Roundabout = '215'
+    PassRightLeft = '222'
+    AccessForbidden = '250'
+    AccessForbiddenMotorvehicles = '251'
+    AccessForbiddenTrucks = '253'
+    AccessForbiddenBicycle = '254'
+    AccessForbiddenWeight = '263'
+    AccessForbiddenWidth = '264'
+    AccessForbiddenHeight = '265'
+    AccessForbiddenWrongDirection = '267'
+    ForbiddenUTurn = '272'
+    MaximumSpeed = '274'
+    ForbiddenOvertakingMotorvehicles = '276'
+    ForbiddenOvertakingTrucks = '277'
+    AbsoluteNoStop = '283'
+    RestrictedStop = '286'
+    HasWayNextIntersection = '301'
+    PriorityWay = '306'
+    PriorityWayEnd = '307'
+    CityBegin = '310'
+    CityEnd = '311'
+    Highway = '330'
+    DeadEnd = '357'
+    RecomendedSpeed = '380'
+    RecomendedSpeedEnd = '381'
+    LightPost = '1000001'
+
+
+class Landmark:
+    """carla.Landmark: an OpenDRIVE <signal> (or a <signalReference> to one) met on a road."""
+
+    def __init__(self, d, carla_map, waypoint=None):
+        self._map = carla_map
+        self.id = d['id']
+        self.name = d['name']
+        self.road_id = _xodr_id(d['road_id'])
+        self.distance = d.get('distance', 0.0)
+        self.s, self.t = d['s'], d['t']
+        self.is_dynamic = d['dynamic']
+        o = d['orientation']
+        self.orientation = (LandmarkOrientation.Positive if o == '+' else LandmarkOrientation.Negative if o == '-'
+                            else LandmarkOrientation.Both)
+        self.z_offset, self.h_offset = d['z_offset'], d['h_offset']
+        self.pitch, self.roll = 0.0, 0.0
+        self.country, self.type, self.sub_type = d['country'], d['type'], d['subtype']
+        self.value = d['value'] if d['value'] == d['value'] else -1.0  # NaN: absent
+        self.unit, self.height, self.width, self.text = d['unit'], d['height'], d['width'], d['text']
+        self.transform = _transform(d['pose'])
+        self.waypoint = waypoint
+        self._validity = [tuple(v) for v in d['validity']]
+
+    def get_lane_validities(self):
+        return list(self._validity)
+
+    def __repr__(self):
+        return 'Landmark(id=%s, type=%s, road_id=%s, s=%.2f)' % (self.id, self.type, self.road_id, self.s)
+
+
+class Junction:
+    """carla.Junction: id (OpenDRIVE), bounding_box (world, CARLA's frame), get_waypoints."""
+
+    def __init__(self, d, carla_map):
+        self._map = carla_map
+        self._index = d['index']
+        self.id = _xodr_id(d['id'])
+        (x, y, z), (ex, ey, ez), _ = d['bounding_box']
+        self.bounding_box = BoundingBox(Location(x, -y, z), Vector3D(ex, ey, ez))
+
+    def get_waypoints(self, lane_type=None):
+        lane_type = LaneType.Driving if lane_type is None else lane_type
+        return [(Waypoint(a, self._map), Waypoint(b, self._map))
+                for a, b in self._map._native.junction_waypoints(self._index, int(lane_type))]
+
+    def __eq__(self, o):
+        return isinstance(o, Junction) and self.id == o.id
+
+    def __hash__(self):
+        return hash(self.id)
+
+    def __repr__(self):
+        return 'Junction(id=%s)' % self.id
+
+
 def _transform(pose6):
     """(x, y, z, yaw, pitch, roll) ENU radians -> carla.Transform."""
     x, y, z, yaw, pitch, roll = pose6
@@ -108,11 +218,11 @@ class Waypoint:
         self._w = native
         self._map = carla_map
         self.id = native.id
-        self.road_id = native.road
+        self.road_id = _xodr_id(native.road_xodr)
         self.section_id = native.section
         self.lane_id = native.lane
         self.s = native.s
-        self.junction_id = native.junction
+        self.junction_id = _xodr_id(native.junction_xodr)
         self.is_junction = native.junction >= 0
         self.lane_width = native.lane_width
         self.lane_type = native.lane_type
@@ -174,11 +284,17 @@ class Waypoint:
         return Waypoint(w, self._map) if w is not None else None
 
     def get_junction(self):
-        unsupported('Waypoint.get_junction', 'carla.Junction objects are not built by the client yet; '
-                    'use Waypoint.junction_id and Map.get_topology()')
+        """The carla.Junction the waypoint is in, None outside junctions (as CARLA)."""
+        d = self._map._native.junction(self._w)
+        return Junction(d, self._map) if d is not None else None
 
     def get_landmarks(self, distance, stop_at_junction=False):
-        unsupported('Waypoint.get_landmarks', 'landmarks (signs) are not exposed over the wire')
+        """Signals ahead on this lane (every branch) within `distance` m, nearest first."""
+        return [Landmark(d, self._map, Waypoint(d['waypoint'], self._map))
+                for d in self._map._native.landmarks_ahead(self._w, float(distance), bool(stop_at_junction))]
+
+    def get_landmarks_of_type(self, distance, type, stop_at_junction=False):
+        return [l for l in self.get_landmarks(distance, stop_at_junction) if l.type == str(type)]
 
     def __eq__(self, o):
         return isinstance(o, Waypoint) and self.id == o.id
@@ -203,7 +319,8 @@ class Map:
         return Waypoint(w, self) if w is not None else None
 
     def get_waypoint_xodr(self, road_id, lane_id, s):
-        return Waypoint(self._native.make_waypoint(road_id, -1, lane_id, s), self)
+        w = self._native.waypoint_xodr(str(road_id), int(lane_id), float(s))
+        return Waypoint(w, self) if w is not None else None
 
     def generate_waypoints(self, distance):
         return [Waypoint(w, self) for w in self._native.generate_waypoints(distance)]
@@ -211,18 +328,72 @@ class Map:
     def get_topology(self):
         return [(Waypoint(a, self), Waypoint(b, self)) for a, b in self._native.topology()]
 
+    def _geo_reference(self):
+        lat = lon = 0.0  # as the GNSS sensor: a missing reference is (0, 0)
+        for token in self._native.geo_reference.split():
+            key, _, value = token.partition('=')
+            try:
+                if key == '+lat_0':
+                    lat = float(value)
+                elif key == '+lon_0':
+                    lon = float(value)
+            except ValueError:
+                pass
+        return lat, lon
+
     def transform_to_geolocation(self, location):
-        unsupported('Map.transform_to_geolocation', "the map's geo reference is not exposed to clients yet; "
-                    'attach a sensor.other.gnss for WGS84 positions')
+        """CARLA's GeoLocation::Transform: a Mercator projection scaled at the
+        OpenDRIVE <geoReference> latitude (+lat_0, +lon_0), altitude = z."""
+        lat0, lon0 = self._geo_reference()
+        r = 6378137.0
+        scale = math.cos(math.radians(lat0))
+        mx = scale * math.radians(lon0) * r + location.x
+        my = scale * r * math.log(math.tan(math.radians(90.0 + lat0) / 2.0)) - location.y
+        lon = mx * 180.0 / (math.pi * r * scale)
+        lat = 360.0 * math.atan(math.exp(my / (r * scale))) / math.pi - 90.0
+        return GeoLocation(lat, lon, location.z)
 
     def to_opendrive(self):
         unsupported('Map.to_opendrive', 'read the .xodr file the run was started with')
 
     def get_all_landmarks(self):
-        unsupported('Map.get_all_landmarks', 'landmarks (signs) are not exposed over the wire')
+        """One carla.Landmark per <signal> and per <signalReference> of the OpenDRIVE file
+        (CARLA's get_all_landmarks; their waypoint is None, as CARLA's)."""
+        return [Landmark(d, self) for d in self._native.all_landmarks()]
+
+    def get_all_landmarks_from_id(self, opendrive_id):
+        return [l for l in self.get_all_landmarks() if l.id == str(opendrive_id)]
+
+    def get_all_landmarks_of_type(self, type):
+        return [l for l in self.get_all_landmarks() if l.type == str(type)]
+
+    def get_landmark_group(self, landmark):
+        """The landmarks of the signals that share a <controller> with this one."""
+        for ids in self._native.landmark_groups().values():
+            if landmark.id in ids:
+                return [l for l in self.get_all_landmarks() if l.id in ids]
+        return [landmark]
 
     def get_crosswalks(self):
-        unsupported('Map.get_crosswalks', 'crosswalks are not exposed over the wire')
+        """Crosswalk polygons (OpenDRIVE objects of type crosswalk) one after another, each
+        closed (first corner repeated), as carla.Locations (CARLA's flat list)."""
+        return [Location(x, -y, z) for x, y, z in self._native.crosswalks()]
+
+    def _junction_id(self, index):
+        d = self._native.junction_by_index(index)
+        return _xodr_id(d['id']) if d is not None else None
+
+    def _trigger_volume(self, signal_id):
+        for i in self._native.traffic_light_infos():
+            if i['signal_id'] == signal_id:
+                return i['trigger_volume']
+        return None
+
+    def _stop_waypoints(self, signal_id):
+        for i in self._native.traffic_light_infos():
+            if i['signal_id'] == signal_id:
+                return [Waypoint(w, self) for w in i['stop_waypoints']]
+        return []
 
     def __repr__(self):
         return 'Map(name=%s)' % self.name

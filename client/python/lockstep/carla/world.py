@@ -11,7 +11,7 @@ from .actors import ActorList, make_actor
 from .blueprints import BlueprintLibrary
 from .constants import WEATHER_FIELDS, WEATHER_PRESETS
 from .errors import unsupported
-from .geometry import Transform, from_enu_vector, from_wire_pose, to_wire_pose
+from .geometry import Transform, from_enu_vector, from_wire_pose, to_enu_vector, to_wire_pose
 from .map import Map
 
 __all__ = ['Client', 'World', 'WorldSettings', 'WeatherParameters', 'TrafficManager', 'WorldSnapshot', 'ActorSnapshot',
@@ -225,15 +225,32 @@ class Client:
     def get_trafficmanager(self, client_connection=8000):
         return TrafficManager(self.get_world(), client_connection)
 
+    def _prepare(self, commands, world):
+        for cmd in commands:
+            if isinstance(cmd, _command.ApplyForce):
+                cmd._dt = world._dt()
+            elif isinstance(cmd, _command.ApplyVehiclePhysicsControl) and cmd.actor_id:
+                cmd._current = world._client.vehicle_physics(cmd.actor_id)
+            self._prepare(getattr(cmd, '_then', []), world)
+
+    def _submit(self, c, commands, actor=0):
+        replies = c.submit_batch([cmd.to_dict(actor) for cmd in commands])
+        for cmd, (ok, _, _, frame) in zip(commands, replies):
+            watch = getattr(cmd, '_watch', None)
+            if ok and watch:
+                c.watch(cmd.actor_id or actor, frame, watch)  # a failure in ground_sim: raised by the next tick
+        return replies
+
     def _run(self, commands, due_tick_cue):
         world = self.get_world()
         c = self._client()
-        replies = c.submit_batch([cmd.to_dict() for cmd in commands])
+        self._prepare(commands, world)
+        replies = self._submit(c, commands)
         out = []
         for cmd, (ok, reason, actor, _) in zip(commands, replies):
             actor_id = actor if ok else 0
             if ok and getattr(cmd, '_then', None):
-                for follow in c.submit_batch([t.to_dict(actor_id) for t in cmd._then]):
+                for follow in self._submit(c, cmd._then, actor_id):
                     if not follow[0]:
                         reason = follow[1]
             out.append(_command.Response(actor_id if not reason else actor_id, reason))
@@ -406,12 +423,32 @@ class World:
         except lockstep.CommandRejected:
             return None
 
+    def _lights_by_signal(self):
+        return {a.get_opendrive_id(): a for a in self.get_actors().filter('traffic.traffic_light*')}
+
     def get_traffic_light(self, landmark):
-        unsupported('World.get_traffic_light', 'landmarks are not exposed over the wire; use get_actors().filter('
-                    "'traffic.traffic_light*')")
+        """The traffic light actor of a landmark (its OpenDRIVE signal id), None if none."""
+        return self._lights_by_signal().get(landmark.id)
+
+    def get_traffic_light_from_opendrive_id(self, traffic_light_id):
+        return self._lights_by_signal().get(str(traffic_light_id))
 
     def get_traffic_lights_from_waypoint(self, waypoint, distance):
-        unsupported('World.get_traffic_lights_from_waypoint', 'landmarks are not exposed over the wire')
+        """The traffic lights of the dynamic landmarks ahead of `waypoint` within
+        `distance` m, nearest first, each once (CARLA's semantics)."""
+        lights, out = self._lights_by_signal(), []
+        for l in waypoint.get_landmarks(distance):
+            tl = lights.get(l.id) if l.is_dynamic else None
+            if tl is not None and tl not in out:
+                out.append(tl)
+        return out
+
+    def get_traffic_lights_in_junction(self, junction_id):
+        """The traffic lights whose controlled lanes drive into that junction."""
+        m = self.get_map()
+        ids = {i['signal_id'] for i in m._native.traffic_light_infos()
+               if i['junction'] >= 0 and m._junction_id(i['junction']) == junction_id}
+        return [tl for sid, tl in sorted(self._lights_by_signal().items()) if sid in ids]
 
     def freeze_all_traffic_lights(self, frozen):
         for a in self.get_actors().filter('traffic.traffic_light*'):
@@ -427,6 +464,10 @@ class World:
             return None
         from .map import _transform
         return _transform(random.choice(points)).location
+
+    def get_vehicles_light_states(self):
+        """{vehicle id: carla.VehicleLightState bits} from the latest GroundState."""
+        return {i: st['light_state'] for i, st in self._client.states().items() if 'light_state' in st}
 
     def get_lightmanager(self):
         unsupported('World.get_lightmanager', 'street and vehicle lights are not simulated')
@@ -476,10 +517,12 @@ class TrafficManager:
     def get_port(self):
         return self._port
 
-    def _set(self, parameter, value, actor=None, call='TrafficManager'):
+    def _set(self, parameter, value, actor=None, call='TrafficManager', **extra):
         self._world._require('ground_sim', 'TrafficManager.' + call)
-        self._world._client.submit({'type': 'traffic_manager', 'parameter': parameter,
-                                    'actor': actor.id if actor is not None else 0, 'value': float(value)})
+        cmd = {'type': 'traffic_manager', 'parameter': parameter, 'actor': actor.id if actor is not None else 0,
+               'value': float(value)}
+        cmd.update(extra)
+        self._world._client.submit(cmd, watch='TrafficManager.' + call)
 
     def set_synchronous_mode(self, mode=True):
         # Lockstep's Traffic Manager always steps inside the tick: there is nothing to switch.
@@ -513,8 +556,7 @@ class TrafficManager:
         self._set('auto_lane_change', 1 if enable else 0, actor, 'auto_lane_change')
 
     def set_hybrid_physics_mode(self, enabled=False):
-        if enabled:
-            unsupported('TrafficManager.set_hybrid_physics_mode', 'every vehicle is always fully simulated')
+        self._set('hybrid_physics_mode', 1 if enabled else 0, call='set_hybrid_physics_mode')
 
     def set_hybrid_physics_radius(self, r=50.0):
         self._set('hybrid_physics_radius', r, call='set_hybrid_physics_radius')
@@ -523,21 +565,36 @@ class TrafficManager:
         self._set('random_seed', value, call='set_random_device_seed')
 
     def set_respawn_dormant_vehicles(self, mode_switch=True):
-        if mode_switch:
-            unsupported('TrafficManager.set_respawn_dormant_vehicles', 'there are no dormant vehicles in Lockstep')
+        self._set('respawn_dormant_vehicles', 1 if mode_switch else 0, call='set_respawn_dormant_vehicles')
+
+    def set_desired_speed(self, actor, speed):
+        """km/h, as CARLA."""
+        self._set('desired_speed', float(speed) / 3.6, actor, 'set_desired_speed')
+
+    def keep_right_rule_percentage(self, actor, perc):
+        self._set('keep_right_rule_percentage', perc, actor, 'keep_right_rule_percentage')
+
+    def random_left_lanechange_percentage(self, actor, percentage):
+        self._set('random_left_lanechange_percentage', percentage, actor, 'random_left_lanechange_percentage')
+
+    def random_right_lanechange_percentage(self, actor, percentage):
+        self._set('random_right_lanechange_percentage', percentage, actor, 'random_right_lanechange_percentage')
 
     def set_osm_mode(self, mode_switch=True):
         if mode_switch:
             unsupported('TrafficManager.set_osm_mode', 'OpenStreetMap import is not supported')
 
     def force_lane_change(self, actor, direction):
-        unsupported('TrafficManager.force_lane_change', 'no forced lane change command on the wire')
+        """direction True = left, as CARLA."""
+        self._set('force_lane_change', 1 if direction else 0, actor, 'force_lane_change')
 
     def set_path(self, actor, path):
-        unsupported('TrafficManager.set_path', 'no route command on the wire')
+        """carla.Locations to pass, in order."""
+        self._set('set_path', 0, actor, 'set_path', path=[to_enu_vector(p) for p in path])
 
     def set_route(self, actor, path):
-        unsupported('TrafficManager.set_route', 'no route command on the wire')
+        """'Left' / 'Right' / 'Straight' at the next junctions, as CARLA."""
+        self._set('set_route', 0, actor, 'set_route', route=[str(r) for r in path])
 
     def update_vehicle_lights(self, actor, do_update):
         unsupported('TrafficManager.update_vehicle_lights', 'vehicle lights are not simulated')

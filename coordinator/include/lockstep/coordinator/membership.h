@@ -17,7 +17,6 @@ namespace lockstep {
 struct Member {
   std::string kind;
   bool required = false;
-  bool ready = false;          // announced READY since it (re)joined
   bool alive = false;          // ready and heard from within the heartbeat timeout
   uint64_t stalled_frame = 0;  // missed the per-tick timeout on this frame: alive again only once it acks it
   int32_t pid = 0;
@@ -33,7 +32,7 @@ struct Member {
   std::string failure;         // why it is not alive, if it failed
   uint32_t blueprints = 0;     // how many it says it declared (ServiceAnnounce.blueprints)
   long blueprints_received = -1;  // how many its BlueprintSet holds; -1: none arrived yet
-  bool ready_announced = false;   // its last announcement said READY
+  bool ready_announced = false;   // its last announcement said READY (cleared when it is declared dead)
 };
 
 // What the operating system says of a member's process, where it can tell.

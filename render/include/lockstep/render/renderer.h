@@ -90,6 +90,7 @@ struct RenderTuning {
   bool depth_prepass = true;        // depth and labels first, then colour shades each visible pixel once
   bool front_to_back = true;        // town cells drawn nearest first, so hidden fragments fail the depth test early
   bool static_shadow_cache = true;  // the town's sun shadows kept while sun and shadow box stay; only actors redrawn
+  bool sky_by_clear = true;         // a pass without colour and flow clears to the sky's labels and depth instead of drawing it
 };
 
 class Renderer {

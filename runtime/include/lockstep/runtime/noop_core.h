@@ -30,7 +30,14 @@ class NoopCore : public ServiceCore {
   uint64_t frames_ = 0;
 };
 
-// Hash of one command's identity (client, sequence number, kind).
+// Hash of one command: client, sequence number, kind and CommandBodyDigest.
 uint64_t CommandHash(const msg::Command& c);
+
+// FNV-1a 64 of a command body: the kind (int32), then, by kind, in IDL order:
+//   set_weather: its 14 floats; traffic_manager: parameter (int32), actor, value;
+//   spawn_actor: blueprint, actor, owner; destroy_actor: actor.
+// Other kinds: the kind only. Strings hash as their length (8 bytes) then their bytes,
+// numbers as their little-endian bytes. client/cyclone_c/participant.c computes the same.
+uint64_t CommandBodyDigest(const msg::CommandBody& body);
 
 }  // namespace lockstep

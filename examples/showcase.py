@@ -133,7 +133,7 @@ def main():
         # --- ground traffic (ground_sim) ---
         tm = client.get_trafficmanager()
         vehicle_bps = library.filter('vehicle.*')
-        ego, npcs, walkers = None, [], []
+        ego, npcs, walkers, controllers = None, [], [], []
         if len(vehicle_bps):
             tm.set_random_device_seed(args.seed)
             ego_bp = vehicle_bps[0]
@@ -154,6 +154,11 @@ def main():
                 if w is not None:
                     walkers.append(w)
             actors += walkers
+            # CARLA's walker AI: without a goal they wander the sidewalks and cross at crosswalks.
+            controller_bps = library.filter('controller.ai.walker')
+            controllers = [world.spawn_actor(controller_bps[0], carla.Transform(), w) for w in walkers
+                           if len(controller_bps)]
+            actors += controllers
         else:
             print('no vehicle blueprints (ground_sim not running): drones and sensors only')
         ego_start = ego.get_transform() if ego else spawn_points[0]
@@ -195,6 +200,9 @@ def main():
                     sensors[name] = world.spawn_actor(library.find(bp_id), carla.Transform(), attach_to=ego)
                     actors.append(sensors[name])
         world.tick()  # the spawn frame
+        for c in controllers:
+            c.start()
+            c.set_max_speed(1.4)
         # Let the drone come to rest: like AirSim, air_sim refuses a takeoff while it moves.
         for _ in range(20):
             world.tick()

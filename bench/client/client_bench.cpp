@@ -6,6 +6,8 @@
 //   tick_roundtrip_us_cpp     median of Client::tick() over DDS (C++)
 //   barrier_median_us         the coordinator's median tick-to-last-ack time meanwhile
 //   tick_roundtrip_us_python  median of lockstep.Client.tick() from Python (client_bench.py)
+//   barrier_median_us_during_python  the barrier's median over those same Python ticks
+//   python_to_barrier         tick_roundtrip_us_python / barrier_median_us_during_python
 //   get_waypoint_us_python    carla Map.get_waypoint from Python, mean per call
 //   image_720p_to_numpy_ms    median from the camera's write to a numpy view in a Python callback
 // Prints JSON lines; the last is the summary.
@@ -163,9 +165,18 @@ int main(int argc, char** argv) {
   // Python: ticks, waypoints, 720p images (client_bench.py prints one JSON line).
   const std::string out = std::filesystem::temp_directory_path() / ("bench-client-" + std::to_string(getpid()) + ".json");
   setenv("PYTHONPATH", LOCKSTEP_BENCH_PYTHONPATH, 1);
+  // The barrier side by side with the Python ticks: in synchronous mode only the client
+  // ticks, so after its 100 warm-up ticks the next `ticks` samples are its measured ones.
+  const size_t py_before = coordinator.stats().barrier_us.size();
   const pid_t py = Spawn({"/usr/bin/python3", LOCKSTEP_BENCH_SCRIPT, dom, std::to_string(ticks)}, out);
   int status = 0;
   waitpid(py, &status, 0);
+  double barrier_py_us = 0;
+  {
+    const auto all = coordinator.stats().barrier_us;
+    const size_t from = std::min(py_before + 100, all.size()), to = std::min(from + ticks, all.size());
+    barrier_py_us = Median(std::vector<double>(all.begin() + from, all.begin() + to));
+  }
   std::string line;
   if (FILE* f = std::fopen(out.c_str(), "r")) {
     char buf[4096];
@@ -191,7 +202,9 @@ int main(int argc, char** argv) {
   std::printf("{\"bench\":\"client_python\",\"tick_us\":%.1f,\"get_waypoint_us\":%.2f,\"image_720p_to_numpy_ms\":%.3f}\n",
               py_values["tick_us"], py_values["waypoint_us"], py_values["image_ms"]);
   std::printf("{\"bench\":\"client\",\"tick_roundtrip_us_cpp\":%.1f,\"tick_roundtrip_us_python\":%.1f,\"get_waypoint_us_python\":%.2f,"
-              "\"image_720p_to_numpy_ms\":%.3f,\"barrier_median_us\":%.1f}\n",
-              cpp_us, py_values["tick_us"], py_values["waypoint_us"], py_values["image_ms"], barrier_us);
+              "\"image_720p_to_numpy_ms\":%.3f,\"barrier_median_us\":%.1f,\"barrier_median_us_during_python\":%.1f,"
+              "\"python_to_barrier\":%.2f}\n",
+              cpp_us, py_values["tick_us"], py_values["waypoint_us"], py_values["image_ms"], barrier_us, barrier_py_us,
+              barrier_py_us > 0 ? py_values["tick_us"] / barrier_py_us : 0.0);
   return 0;
 }

@@ -158,6 +158,7 @@ struct Client::Impl {
   std::deque<Watched> watched;
   std::map<std::tuple<uint32_t, uint64_t, uint32_t>, std::string> service_failures;
   uint64_t next_seq = 1;
+  uint64_t quiet_reply = 0;  // tick() waits for this reply and the FrameDone it names: the reply alone need not wake it
   uint64_t next_drone_command = 1;
   uint64_t drone_id_base = 0;
 
@@ -231,7 +232,16 @@ struct Client::Impl {
     });
     reply_reader = Reader<msg::CommandReply>(*bus, topics::kCommandReply, [this](const msg::CommandReply& r, const SampleInfo&) {
       if (r.client().to_string() != options.name) return;
-      Update(kFrame, [&] { OnReply(r); });
+      bool wake_tick = true;
+      {
+        std::lock_guard<std::mutex> lock(mu);
+        OnReply(r);
+        // The tick() waiting for it needs the FrameDone too: that one wakes it (one wake
+        // per tick, not two, on the machine the services step on).
+        wake_tick = !(r.sequence_number() == quiet_reply && r.accepted() && done < RunFrame{r.run(), r.frame()});
+      }
+      cv.notify_all();
+      if (wake_tick) frame_cv.notify_all();
     });
     blueprint_reader = Reader<msg::BlueprintSet>(*bus, topics::kBlueprints, [this](const msg::BlueprintSet& s, const SampleInfo&) {
       Update([&] { declarations[s.service().to_string()] = s.blueprints(); });
@@ -796,11 +806,23 @@ uint64_t Client::tick() {
   msg::TickRequest t;
   t.count(1);
   b.tick_request(t);
-  const msg::CommandReply r = Submit(std::move(b));
-  const RunFrame want{r.run(), r.frame()};
+  const uint64_t seq = s.Send(std::move(b));
+  msg::CommandReply r;
   {
+    // One wait for the reply and the FrameDone it names (Impl::quiet_reply).
     std::unique_lock<std::mutex> lock(s.mu);
-    if (!s.WaitOn(s.frame_cv, lock, Deadline(s.options.tick_timeout_s), [&] { return s.done >= want; })) {
+    s.quiet_reply = seq;
+    auto done_for = [&](const msg::CommandReply& x) { return !x.accepted() || s.done >= RunFrame{x.run(), x.frame()}; };
+    const bool replied = s.WaitOn(s.frame_cv, lock, Deadline(s.options.timeout_s), [&] {
+      auto it = s.replies.find(seq);
+      return it != s.replies.end() && done_for(it->second);
+    }) || s.replies.count(seq) > 0;
+    s.quiet_reply = 0;
+    if (!replied) throw ClientError(std::string("tick: no reply from the coordinator within ") + Fmt(s.options.timeout_s) + " s");
+    r = s.replies.at(seq);
+    s.replies.erase(seq);
+    if (!r.accepted()) throw CommandRejected("tick rejected: " + r.reason().to_string(), r.reason().to_string());
+    if (!s.WaitOn(s.frame_cv, lock, Deadline(s.options.tick_timeout_s), [&] { return done_for(r); })) {
       throw ClientError("tick(): frame " + std::to_string(r.frame()) + " did not complete within " + Fmt(s.options.tick_timeout_s) +
                         " s" + s.FaultReason());
     }

@@ -189,7 +189,16 @@ struct Coordinator::Impl {
       if (members.OnAck(name, run, a)) status_dirty = true;
       wake = barrier.OnAck(name, a.run(), a.frame(), a.state_hash()) == TickBarrier::AckResult::kCounted &&
              barrier.Complete();
-      if (wake && CanChainTick()) {
+      if (wake && CanChainSynchronous()) {
+        // Synchronous: complete the tick here and start the next one a client asked for,
+        // so FrameDone (and the next tick) leave without a hand-off to the main loop.
+        const auto now = Clock::now();
+        CompleteTick(now);
+        StartRequestedTick(now);
+        PostDone();
+        wake = status_dirty;  // the main loop publishes the status, after FrameDone
+        chained = true;
+      } else if (wake && CanChainTick()) {
         // Free-running at full speed with nothing else to do: start the next tick from
         // this thread, saving a hand-off to the main loop on every tick.
         const auto now = Clock::now();
@@ -202,6 +211,28 @@ struct Coordinator::Impl {
     }
     if (wake) cv.notify_one();
     if (chained) FlushFromCallback();
+  }
+
+  // Synchronous mode, nothing but ticks to do: what the main loop would do next is
+  // complete the tick and start the next requested one (or wait for a request).
+  bool CanChainSynchronous() const {
+    return settings.synchronous_mode() && (state == RunState::RUN_RUNNING || state == RunState::RUN_READY) &&
+           inbox.empty() && !checking && !ScheduledDue(open_tick.frame() + 1) && AllAlive();
+  }
+  bool AllAlive() const {
+    for (const auto& name : required_services) {
+      const Member* m = members.Find(name);
+      if (m == nullptr || !m->alive) return false;
+    }
+    return true;
+  }
+  // Synchronous mode with no tick in flight: start one if a client asked for it.
+  void StartRequestedTick(Clock::time_point now) {
+    SetState(ticks_requested > 0 ? RunState::RUN_RUNNING : RunState::RUN_READY);
+    if (ticks_requested > 0) {
+      --ticks_requested;
+      StartTick(now);
+    }
   }
 
   // The main loop's decisions would be "complete this tick, start the next one".
@@ -283,11 +314,30 @@ struct Coordinator::Impl {
   }
 
   void OnCommand(const msg::Command& c) {
+    bool wake = true;
+    bool started = false;
     {
       std::lock_guard<std::mutex> lock(mu);
       inbox.push_back(c);
+      if (c.body()._d() == msg::CommandKind::CMD_TICK && inbox.size() == 1 && CanChainSynchronous() && !barrier.open()) {
+        // A client's tick request while the run waits for one: start the tick from this
+        // thread, as the main loop would, without waking it first; the reply goes after
+        // the tick, which is on every service's critical path.
+        inbox.clear();
+        const msg::CommandReply reply = commands.Submit(c, run, frame + 1, true);
+        if (reply.accepted()) {
+          ticks_requested += c.body().tick_request().count();
+        } else {
+          spdlog::warn("rejected command {} from '{}': {}", c.sequence_number(), c.client().to_string(), reply.reason().to_string());
+        }
+        StartRequestedTick(Clock::now());
+        Post(reply_writer, reply);
+        started = true;
+        wake = status_dirty;
+      }
     }
-    cv.notify_one();
+    if (wake) cv.notify_one();
+    if (started) FlushFromCallback();
   }
 
   // --- main loop helpers (called with mu held) ---
@@ -442,7 +492,9 @@ struct Coordinator::Impl {
     spdlog::log(routine ? spdlog::level::debug : spdlog::level::info, "run {} frame {}: {} -> {}", run, frame,
                 RunStateName(state), RunStateName(next));
     state = next;
-    status_dirty = true;
+    // The routine ones go out with the next periodic status (at most 500 ms later): two
+    // statuses per tick went to every service and client.
+    if (!routine) status_dirty = true;
   }
 
   // Starts a new run (reset or new map): actors gone, frame 0.
@@ -810,11 +862,7 @@ int Coordinator::Run(const std::atomic<bool>& stop) {
     }
     if (active && !s.barrier.open()) {
       if (s.settings.synchronous_mode()) {
-        s.SetState(s.ticks_requested > 0 ? RunState::RUN_RUNNING : RunState::RUN_READY);
-        if (s.ticks_requested > 0) {
-          --s.ticks_requested;
-          s.StartTick(now);
-        }
+        s.StartRequestedTick(now);
       } else {
         s.SetState(RunState::RUN_RUNNING);
         const double rtf = s.settings.real_time_factor();

@@ -134,6 +134,41 @@ TEST_F(ClientTest, ALateReaderOfTheActorListGetsEveryLiveActorsSpawn) {
   EXPECT_EQ(a.frame(), k - 1);
 }
 
+// A watched command the coordinator accepts but the owning service refuses when it
+// applies it: the tick that applies it throws the service's reason, naming the call;
+// watched commands the service applies throw nothing.
+TEST_F(ClientTest, AWatchedCommandTheServiceRefusesIsThrownByTheTickThatAppliesIt) {
+  Start(true);
+  const uint32_t drone = client_->spawn("drone.generic_quad", MakePose(43.25, -1.75, 3.0));
+  client_->tick();
+  client_->tick();  // falling by now
+  auto body = [&](msg::DroneCommandKind kind, uint64_t id) {
+    msg::DroneCommand c;
+    c.actor(drone);
+    c.kind(kind);
+    c.command_id(id);
+    msg::CommandBody b;
+    b.drone(c);
+    return b;
+  };
+  client_->SubmitWatched(body(msg::DroneCommandKind::DRONE_ARM, 1), "armDisarm");
+  for (int i = 0; i < 3; ++i) EXPECT_NO_THROW(client_->tick());
+  client_->SubmitWatched(body(msg::DroneCommandKind::DRONE_TAKEOFF, 2), "takeoffAsync");
+  std::string what, reason;
+  for (int i = 0; i < 2 && what.empty(); ++i) {  // the applying tick, or the next if the event came late
+    try {
+      client_->tick();
+    } catch (const CommandRejected& e) {
+      what = e.what();
+      reason = e.reason();
+    }
+  }
+  EXPECT_NE(reason.find("cannot take off while moving"), std::string::npos) << what;
+  EXPECT_NE(what.find("takeoffAsync (actor " + std::to_string(drone)), std::string::npos) << what;
+  EXPECT_NE(what.find("air_sim"), std::string::npos) << what;
+  EXPECT_NO_THROW(client_->check_failures());  // thrown once
+}
+
 TEST_F(ClientTest, TickInFreeRunningModeRaisesTheCoordinatorsReason) {
   Start(false);
   try {

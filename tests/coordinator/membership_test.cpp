@@ -219,6 +219,15 @@ TEST(Membership, AcksOfTheCurrentRunTrackTheLastFrameAndHash) {
   ASSERT_NE(m.Find("air"), nullptr);
   EXPECT_EQ(m.Find("air")->last_frame, 5u);
   EXPECT_EQ(m.Find("air")->last_hash, 0xabcu);
+  // replay_from follows the newest ack: the coordinator trims its tick log by it.
+  auto ack = AckOf(2, 6, 0xdef);
+  ack.replay_from(6);
+  m.OnAck("air", 2, ack);
+  EXPECT_EQ(m.Find("air")->replay_from, 6u);
+  ack = AckOf(2, 3, 0x1);
+  ack.replay_from(3);
+  m.OnAck("air", 2, ack);
+  EXPECT_EQ(m.Find("air")->replay_from, 6u) << "a re-ack of an older frame leaves it";
 }
 
 // A re-sent tick is acked again; an ack without a hash (0 = none) must not erase the hash
@@ -274,6 +283,20 @@ TEST(Membership, OnlyAReadyAnnouncementWithItsDeclarationsMakesAMemberAlive) {
   EXPECT_TRUE(n.OnBlueprints("air", 2));
   EXPECT_TRUE(n.Find("air")->alive);
   EXPECT_EQ(n.FirstMissing(&who), "");
+  // Alive, it announces a larger set than the one here: not alive until that set arrives.
+  auto more = ready;
+  more.blueprints(3);
+  EXPECT_TRUE(n.OnAnnounce(more, t0 + 100ms));
+  EXPECT_FALSE(n.Find("air")->alive);
+  EXPECT_TRUE(n.OnBlueprints("air", 3));
+  EXPECT_TRUE(n.Find("air")->alive);
+}
+
+TEST(Membership, AStallOfAnUnknownServiceIsIgnored) {
+  Membership m({"air"}, 600ms);
+  m.MarkStalled("ghost", 5);
+  EXPECT_EQ(m.Find("ghost"), nullptr);
+  EXPECT_EQ(m.members().size(), 1u);
 }
 
 TEST(Membership, AnAnnouncedShutdownIsAFailureWithItsReason) {

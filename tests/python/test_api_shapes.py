@@ -22,13 +22,18 @@ def test_drop_in_modules_are_lockstep():
     'LaneMarking', 'LaneMarkingType', 'LaneMarkingColor', 'ColorConverter', 'TrafficManager', 'TrafficLightState',
     'AttachmentType', 'Image', 'LidarMeasurement', 'SemanticLidarMeasurement', 'IMUMeasurement', 'GnssMeasurement',
     'CollisionEvent', 'LaneInvasionEvent', 'ObstacleDetectionEvent', 'RadarMeasurement', 'Actor', 'Vehicle', 'Walker',
-    'TrafficLight', 'Sensor', 'ActorBlueprint', 'BlueprintLibrary', 'WorldSnapshot', 'Timestamp', 'GeoLocation'])
+    'TrafficLight', 'Sensor', 'ActorBlueprint', 'BlueprintLibrary', 'WorldSnapshot', 'Timestamp', 'GeoLocation',
+    'VehicleAckermannControl', 'AckermannControllerSettings', 'VehiclePhysicsControl', 'WheelPhysicsControl',
+    'GearPhysicsControl', 'WalkerAIController', 'Junction', 'Landmark', 'LandmarkOrientation', 'LandmarkType',
+    'VehicleLightState'])
 def test_carla_names(name):
     assert hasattr(carla, name)
 
 
 @pytest.mark.parametrize('name', ['SpawnActor', 'DestroyActor', 'ApplyVehicleControl', 'ApplyWalkerControl',
-                                  'ApplyTransform', 'SetAutopilot', 'FutureActor', 'Response'])
+                                  'ApplyTransform', 'SetAutopilot', 'FutureActor', 'Response', 'SetSimulatePhysics',
+                                  'ApplyVehicleAckermannControl', 'ApplyImpulse', 'ApplyForce', 'ApplyTargetVelocity',
+                                  'ApplyTargetAngularVelocity', 'SetVehicleLightState', 'ApplyVehiclePhysicsControl'])
 def test_carla_commands(name):
     assert hasattr(carla.command, name)
 
@@ -116,3 +121,50 @@ def test_vehicle_control_defaults_match_carla():
     c = carla.VehicleControl()
     assert (c.throttle, c.steer, c.brake, c.hand_brake, c.reverse, c.manual_gear_shift, c.gear) == \
         (0, 0, 0, False, False, False, 0)
+
+
+def test_calls_lockstep_lacks_raise_naming_themselves_not_attribute_error():
+    """Every CARLA call without a Lockstep counterpart exists and raises LockstepUnsupported
+    whose message names it (never AttributeError, never a silent no-op)."""
+    calls = {carla.Vehicle: ['close_door', 'use_carsim_road', 'enable_chrono_physics', 'show_debug_telemetry',
+                             'open_door', 'enable_carsim', 'get_ackermann_controller_settings'],
+             carla.World: ['get_names_of_all_objects', 'set_pedestrians_cross_factor', 'set_pedestrians_seed',
+                           'ground_projection', 'enable_environment_objects', 'cast_ray', 'get_lightmanager'],
+             carla.Sensor: ['listen_to_gbuffer', 'enable_for_ros', 'send'],
+             carla.Map: ['save_to_disk', 'cook_in_memory_map', 'to_opendrive'],
+             carla.TrafficManager: ['get_next_action', 'get_all_actions'],
+             carla.Client: ['request_file', 'show_recorder_collisions', 'stop_replayer', 'start_recorder'],
+             carla.TrafficLight: ['get_light_boxes', 'reset_group'],
+             carla.Actor: ['get_component_world_transform', 'set_enable_gravity', 'add_torque'],
+             carla.Walker: ['blend_pose', 'get_bones']}
+    for cls, names in calls.items():
+        obj = cls.__new__(cls)
+        for name in names:
+            with pytest.raises(carla.LockstepUnsupported, match=r'\.%s is not supported by Lockstep: .+' % name):
+                getattr(obj, name)(*([None] * (getattr(obj, name).__code__.co_argcount - 1)))
+
+
+def test_physics_control_shapes_and_units():
+    front, rear = carla.WheelPhysicsControl(), carla.WheelPhysicsControl(max_steer_angle=0.0)
+    p = carla.VehiclePhysicsControl(wheels=[front, front, rear, rear])  # as CARLA's tutorial builds them
+    assert p.max_rpm == 5000 and p.wheels[0].radius == 30.0 and p.wheels[0].max_steer_angle == 70.0
+    assert carla.GearPhysicsControl().up_ratio == 0.65
+    a = carla.VehicleAckermannControl(steer=0.1, speed=3.0)
+    assert (a.steer, a.speed, a.acceleration) == (0.1, 3.0, 0.0)
+    from lockstep.carla.physics import to_wire
+    current = {'wheelbase': 2.8, 'track': 1.6, 'suspension_stiffness': 5e4, 'suspension_damping': 3500.0}
+    d = to_wire(p, current)
+    assert d['wheel_radius'] == pytest.approx(0.30) and d['max_steer_angle'] == pytest.approx(math.radians(70))
+    assert d['wheelbase'] == 2.8  # Lockstep's own fields left None keep the vehicle's
+    p.wheels[2].max_steer_angle = 10.0
+    with pytest.raises(carla.LockstepUnsupported, match='rear wheels'):
+        to_wire(p, current)
+
+
+def test_airsim_calls_lockstep_lacks_raise_naming_themselves():
+    c = airsim.MultirotorClient.__new__(airsim.MultirotorClient)
+    for name in ('moveByManualAsync', 'simSetTimeOfDay', 'simGetObjectPose', 'simListSceneObjects',
+                 'simGetSegmentationObjectID', 'simSetCameraPose', 'simSetCameraFov', 'simPlotPoints'):
+        with pytest.raises(airsim.LockstepUnsupported, match=name):
+            f = getattr(c, name)
+            f(*(['x'] * (f.__code__.co_argcount - 1) if f.__code__.co_argcount > 1 else []))

@@ -114,7 +114,10 @@ def test_physics_control_reads_back_and_changes_the_dynamics(world, car):
     heavy = 2 * p.mass
     p.mass = heavy
     car.apply_physics_control(p)
+    assert car.get_physics_control().mass == pytest.approx(heavy)  # at once, as CARLA
+    assert world._client.vehicle_physics(car.id)['mass'] != pytest.approx(heavy)  # ground_sim: at the tick
     world.tick()
+    assert world._client.vehicle_physics(car.id)['mass'] == pytest.approx(heavy)
     assert car.get_physics_control().mass == pytest.approx(heavy)
     car.add_impulse(forward * (3.0 * heavy / 2))
     world.tick()
@@ -140,7 +143,9 @@ def test_light_state(world, car):
     assert car.get_light_state() == carla.VehicleLightState.NONE
     lights = carla.VehicleLightState.LowBeam | carla.VehicleLightState.Position
     car.set_light_state(lights)
+    assert car.get_light_state() == lights  # at once, as CARLA
     world.tick()
+    assert world._client.state(car.id)['light_state'] == lights
     assert car.get_light_state() == lights
     assert world.get_vehicles_light_states()[car.id] == lights
 

@@ -611,6 +611,12 @@ class MultirotorClient:
     def simSetCameraPose(self, *args, **kwargs):
         _unsupported('simSetCameraPose', 'cameras are fixed mounts; spawn others with the CARLA API')
 
+    def simSetCameraFov(self, *args, **kwargs):
+        _unsupported('simSetCameraFov', "a camera's fov is a spawn attribute; spawn another with the CARLA API")
+
+    def simGetSegmentationObjectID(self, *args, **kwargs):
+        _unsupported('simGetSegmentationObjectID', "segmentation ids are CARLA's semantic tags")
+
 
 
 VehicleClient = MultirotorClient

@@ -13,6 +13,7 @@ from .map import *  # noqa: F401,F403
 from .physics import *  # noqa: F401,F403
 from .sensor_data import *  # noqa: F401,F403
 from .world import *  # noqa: F401,F403
+from . import unsupported as _unsupported  # noqa: F401 (installs the calls that raise)
 
 cc = ColorConverter  # noqa: F405
 

@@ -196,7 +196,8 @@ class Actor:
         self._world._require('ground_sim', call)
         cmd = {'type': 'actor_physics', 'actor': self.id, 'kind': kind}
         cmd.update(kw)
-        self._world._client.submit(cmd, watch=call)
+        reply = self._world._client.submit(cmd, watch=call)
+        self._world._note_applied(cmd, reply[3])
 
     def set_simulate_physics(self, enabled=True):
         self._physics('Actor.set_simulate_physics', 'set_simulate_physics', enabled=bool(enabled))
@@ -289,26 +290,30 @@ class Vehicle(Actor):
         d = self._world._client.vehicle_physics(self.id)
         if d is None:
             raise RuntimeError('%s: vehicle %d has no state yet (tick once after spawning it)' % (call, self.id))
-        return d
+        return self._world._applied_value(self.id, 'physics', d)
 
     def get_physics_control(self):
-        """What ground_sim reports in the latest GroundState: a control applied in
-        synchronous mode shows after the tick that applies it (CARLA: at once)."""
+        """The vehicle's physics: what this client applied last until the GroundState of
+        the frame that applies it arrives (so it reads back at once, as CARLA), then what
+        ground_sim reports."""
         s = self._state()
         return _physics_from_wire(self._physics_wire('Vehicle.get_physics_control'), from_wire_pose(s['transform']),
                                   s['half_extents'])
 
     def apply_physics_control(self, physics_control):
         call = 'Vehicle.apply_physics_control'
-        d = _physics_to_wire(physics_control, self._physics_wire(call), call)
-        self._world._client.submit({'type': 'vehicle_physics', 'actor': self.id, 'physics': d}, watch=call)
+        cmd = {'type': 'vehicle_physics', 'actor': self.id,
+               'physics': _physics_to_wire(physics_control, self._physics_wire(call), call)}
+        self._world._note_applied(cmd, self._world._client.submit(cmd, watch=call)[3])
 
     def set_light_state(self, light_state):
         self._physics('Vehicle.set_light_state', 'set_light_state', light_state=int(light_state) & 0xFFFFFFFF)
 
     def get_light_state(self):
+        """As get_physics_control: this client's last set_light_state until its frame's state."""
         s = self._state()
-        return s.get('light_state', VehicleLightState.NONE) if s else VehicleLightState.NONE
+        bits = s.get('light_state', VehicleLightState.NONE) if s else VehicleLightState.NONE
+        return self._world._applied_value(self.id, 'light_state', bits)
 
     def apply_ackermann_control(self, control):
         self._world._require('ground_sim', 'Vehicle.apply_ackermann_control')

@@ -234,11 +234,13 @@ class Client:
             self._prepare(getattr(cmd, '_then', []), world)
 
     def _submit(self, c, commands, actor=0):
-        replies = c.submit_batch([cmd.to_dict(actor) for cmd in commands])
-        for cmd, (ok, _, _, frame) in zip(commands, replies):
+        dicts = [cmd.to_dict(actor) for cmd in commands]
+        replies = c.submit_batch(dicts)
+        for cmd, d, (ok, _, _, frame) in zip(commands, dicts, replies):
             watch = getattr(cmd, '_watch', None)
             if ok and watch:
                 c.watch(cmd.actor_id or actor, frame, watch)  # a failure in ground_sim: raised by the next tick
+                self.get_world()._note_applied(d, frame)
         return replies
 
     def _run(self, commands, due_tick_cue):
@@ -308,6 +310,25 @@ class World:
         self._spectator = _Spectator()
         self._on_tick = {}
         self._next_cb = 1
+        # (actor, 'physics' | 'light_state') -> (frame, value) this client applied: shown
+        # until the state of that frame arrives (CARLA applies them at once).
+        self._applied = {}
+
+    def _note_applied(self, cmd, frame):
+        if cmd['type'] == 'vehicle_physics':
+            self._applied[(cmd['actor'], 'physics')] = (frame, cmd['physics'])
+        elif cmd['type'] == 'actor_physics' and cmd['kind'] == 'set_light_state':
+            self._applied[(cmd['actor'], 'light_state')] = (frame, cmd['light_state'])
+
+    def _applied_value(self, actor, key, reported):
+        a = self._applied.get((actor, key))
+        if a is None:
+            return reported
+        ground_frame = self._client.snapshot_frame()[3]  # the frame of the latest GroundState
+        if ground_frame >= a[0]:
+            del self._applied[(actor, key)]
+            return reported
+        return a[1]
 
     @property
     def id(self):

@@ -1,0 +1,66 @@
+"""CARLA calls Lockstep cannot do, each raising LockstepUnsupported with its reason
+(docs/compatibility.md lists them with the rest)."""
+from .actors import Actor, Sensor, TrafficLight, Vehicle, Walker
+from .errors import add_unsupported
+from .map import Map
+from .world import Client, TrafficManager, World
+
+_NO_RECORDER = 'recording is the recorder service of the launch config (CSV of every frame)'
+_NO_SCENE = 'the static scene (Unreal objects, components, bones) is not on the wire'
+
+add_unsupported(Vehicle, {
+    'close_door': 'doors are not simulated',
+    'use_carsim_road': 'CarSim is an Unreal plug-in',
+    'enable_chrono_physics': 'Chrono is an Unreal plug-in; ground_sim simulates vehicles with ODE',
+    'show_debug_telemetry': 'there is no viewport to draw in',
+})
+add_unsupported(World, {
+    'get_names_of_all_objects': _NO_SCENE,
+    'set_pedestrians_cross_factor': 'ground_sim has a cross factor, but no command sets it on the wire yet',
+    'set_pedestrians_seed': 'walkers draw from the run seed (lockstep up --seed, Client.reload_world)',
+    'set_annotations_traverse_translucency': 'render has no translucent annotations to traverse',
+    'ground_projection': 'ray casts run inside the sensors service, not in clients',
+    'enable_environment_objects': _NO_SCENE,
+})
+add_unsupported(Sensor, {
+    'listen_to_gbuffer': 'render publishes no G-buffers',
+    'stop_gbuffer': 'render publishes no G-buffers',
+    'enable_for_ros': 'there is no ROS bridge; the DDS topics are the interface (docs/topics.md)',
+    'disable_for_ros': 'there is no ROS bridge',
+    'is_enabled_for_ros': 'there is no ROS bridge',
+    'send': 'only V2X sensors take messages, and there are none',
+})
+add_unsupported(Map, {
+    'save_to_disk': 'the .xodr file the run was started with is the map',
+    'cook_in_memory_map': 'there is no Unreal map to cook',
+})
+add_unsupported(TrafficManager, {
+    'get_next_action': "the Traffic Manager's plans are not on the wire",
+    'get_all_actions': "the Traffic Manager's plans are not on the wire",
+})
+add_unsupported(Client, {
+    'set_files_base_folder': 'there are no server-side asset files',
+    'get_required_files': 'there are no server-side asset files',
+    'request_file': 'there are no server-side asset files',
+    'show_recorder_collisions': _NO_RECORDER,
+    'show_recorder_actors_blocked': _NO_RECORDER,
+    'set_replayer_time_factor': _NO_RECORDER,
+    'set_replayer_ignore_hero': _NO_RECORDER,
+    'set_replayer_ignore_spectator': _NO_RECORDER,
+    'stop_replayer': _NO_RECORDER,
+})
+add_unsupported(TrafficLight, {'get_light_boxes': 'the light meshes are not in the client'})
+add_unsupported(Actor, {
+    'get_component_world_transform': _NO_SCENE,
+    'get_component_relative_transform': _NO_SCENE,
+    'get_bone_world_transforms': _NO_SCENE,
+    'get_component_names': _NO_SCENE,
+    'get_socket_names': _NO_SCENE,
+})
+add_unsupported(Walker, {
+    'blend_pose': 'walkers are boxes in ground_sim: no skeleton',
+    'show_pose': 'walkers are boxes in ground_sim: no skeleton',
+    'hide_pose': 'walkers are boxes in ground_sim: no skeleton',
+    'get_bones': 'walkers are boxes in ground_sim: no skeleton',
+    'set_bones': 'walkers are boxes in ground_sim: no skeleton',
+})

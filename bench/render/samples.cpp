@@ -8,6 +8,7 @@
 #include <string>
 
 #include "lockstep/render/dvs.h"
+#include "lockstep/render/exposure.h"
 #include "lockstep/render/images.h"
 #include "lockstep/render/weather.h"
 #include "town.h"
@@ -83,6 +84,34 @@ int Samples(const std::string& dir) {
     auto f = r.RenderFrames({car}, town.world)[0];
     std::string name = std::string("car_rgb_") + preset;
     Write(dir, name, f.color);
+  }
+  // Histogram auto exposure at night: 12 images 0.5 s apart, exposure_min_bright lowered
+  // to 2 (CARLA's 10 keeps the night as dark as the manual image above).
+  {
+    town.world.weather = WeatherPreset("ClearNight");
+    for (auto& a : town.world.actors) a.lights_on = true;
+    ExposureSettings es;
+    es.min_bright = 2;
+    AutoExposure ae(es);
+    Camera c = car;
+    CameraFrame f;
+    for (int k = 0; k < 12; ++k) {
+      c.exposure = ae.Multiplier();
+      f = r.RenderFrames({c}, town.world)[0];
+      ae.Update(f.color.data(), kW, kH, c.exposure, c.gamma, k == 0 ? 0.0 : 0.5);
+    }
+    Write(dir, "car_rgb_ClearNight_auto_exposure", f.color);
+    for (auto& a : town.world.actors) a.lights_on = false;
+  }
+  // Motion blur: the car's camera 0.8 m on since its previous image (CARLA's intensity
+  // 0.45; max_distortion 5 %, Unreal's default, so that it shows at this size).
+  {
+    town.world.weather = WeatherPreset("ClearNoon");
+    Camera c = car;
+    c.previous_pose = c.pose * Pose{Vec3(-0.8, 0, 0), Quat::Identity()};
+    c.motion_blur_intensity = 0.45;
+    c.motion_blur_max_distortion = 5;
+    Write(dir, "car_rgb_motion_blur", r.RenderFrames({c}, town.world)[0].color);
   }
   // DVS: events between two frames of the car driving 1 m on, red = brighter, blue = darker.
   town.world.weather = WeatherPreset("ClearNoon");

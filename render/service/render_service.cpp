@@ -109,6 +109,8 @@ struct RenderService::CameraRecord {
   double last_capture = -1e300;
   std::optional<render::Pose> last_pose;
   std::unique_ptr<render::DvsSensor> dvs;
+  render::AutoExposure exposure;  // colour cameras: adapts from image to image (histogram mode)
+  double exposure_dt = 0;         // s of simulated time since the camera's previous image
   msg::Image image;  // reused: its buffer keeps its capacity from frame to frame
 };
 
@@ -331,6 +333,7 @@ void RenderService::Apply(const msg::Command& c, const msg::FrameStamp& stamp) {
       cam->id = s.actor();
       cam->parent = s.parent();
       cam->relative = rec.transform;
+      cam->exposure = render::AutoExposure(cam->settings.exposure);
       cam->role = rec.attributes.count("role_name") ? rec.attributes["role_name"] : "";
       cam->topic = topics::ImageTopicName(s.actor());
       cam->writer = Writer<msg::Image>(bus_, Topic<msg::Image>{cam->topic.c_str(), QosKind::kImage});
@@ -518,6 +521,8 @@ void RenderService::Step(const msg::Tick& tick) {
       pose = p->second * cam->relative;
     }
     render::Camera view = cam->settings.camera;
+    view.exposure = cam->exposure.Multiplier();
+    cam->exposure_dt = cam->last_capture > -1e299 ? stamp.sim_time() - cam->last_capture : 0.0;
     view.pose = pose;
     view.previous_pose = cam->last_pose;
     view.noise_seed = world_.seed() ^ (static_cast<uint64_t>(id) << 32) ^ k;
@@ -529,6 +534,7 @@ void RenderService::Step(const msg::Tick& tick) {
       if (render::SameLens(c, view) && c.pose.position == view.pose.position &&
           c.pose.orientation.coeffs() == view.pose.orientation.coeffs() &&
           c.previous_pose.has_value() == view.previous_pose.has_value()) {
+        if ((view.outputs & render::kOutColor) && !(pass.camera.outputs & render::kOutColor)) render::TakeColourSettings(pass.camera, view);
         pass.camera.outputs |= view.outputs;
         pass.members.push_back(cam.get());
         joined = true;
@@ -541,6 +547,11 @@ void RenderService::Step(const msg::Tick& tick) {
   for (const auto& p : passes) views.push_back(p.camera);
   renderer_->Render(views, world, [&](std::size_t i, const render::CameraImages& images) {
     for (CameraRecord* cam : passes[i].members) {
+      const render::Camera& v = passes[i].camera;
+      if (images.color && (render::OutputsFor(cam->settings.kind) & render::kOutColor)) {
+        cam->exposure.Update(images.color, images.width, images.height, v.exposure * std::exp2(v.exposure_compensation), v.gamma,
+                             cam->exposure_dt);
+      }
       Publish(*cam, passes[i].camera, images, stamp);
       if (!options_.save_dir.empty() && k % options_.save_every == 0) Save(*cam, images, k);
     }

@@ -74,11 +74,32 @@ Eigen::Matrix4f ProjectionMatrix(const Camera& cam) {
 
 bool Camera::HasLensDistortion() const { return lens_circle_multiplier > 0 && (lens_k != 0 || lens_kcube != 0); }
 
+bool Camera::HasMotionBlur() const {
+  return (outputs & kOutColor) && motion_blur_intensity > 0 && motion_blur_max_distortion > 0;
+}
+
 bool SameLens(const Camera& a, const Camera& b) {
-  return a.width == b.width && a.height == b.height && a.fov_deg == b.fov_deg && a.gamma == b.gamma &&
-         a.exposure_compensation == b.exposure_compensation && a.lens_circle_multiplier == b.lens_circle_multiplier &&
-         a.lens_circle_falloff == b.lens_circle_falloff && a.lens_k == b.lens_k && a.lens_kcube == b.lens_kcube &&
-         a.lens_x_size == b.lens_x_size && a.lens_y_size == b.lens_y_size && a.post_process == b.post_process;
+  const bool geometry = a.width == b.width && a.height == b.height && a.fov_deg == b.fov_deg &&
+                        a.lens_circle_multiplier == b.lens_circle_multiplier && a.lens_circle_falloff == b.lens_circle_falloff &&
+                        a.lens_k == b.lens_k && a.lens_kcube == b.lens_kcube && a.lens_x_size == b.lens_x_size &&
+                        a.lens_y_size == b.lens_y_size;
+  // The colour settings matter only where both have a colour output (the pass takes them
+  // from the one that has: TakeColourSettings).
+  if (!geometry || !(a.outputs & kOutColor) || !(b.outputs & kOutColor)) return geometry;
+  return a.gamma == b.gamma && a.exposure == b.exposure && a.exposure_compensation == b.exposure_compensation &&
+         a.post_process == b.post_process && a.motion_blur_intensity == b.motion_blur_intensity &&
+         a.motion_blur_max_distortion == b.motion_blur_max_distortion &&
+         a.motion_blur_min_object_screen_size == b.motion_blur_min_object_screen_size;
+}
+
+void TakeColourSettings(Camera& dst, const Camera& src) {
+  dst.gamma = src.gamma;
+  dst.exposure = src.exposure;
+  dst.exposure_compensation = src.exposure_compensation;
+  dst.post_process = src.post_process;
+  dst.motion_blur_intensity = src.motion_blur_intensity;
+  dst.motion_blur_max_distortion = src.motion_blur_max_distortion;
+  dst.motion_blur_min_object_screen_size = src.motion_blur_min_object_screen_size;
 }
 
 Eigen::Vector2d DistortedSource(const Camera& cam, double u, double v) {

@@ -26,8 +26,20 @@ std::vector<AttributeSpec> Basic() {
 std::vector<AttributeSpec> Rgb() {
   auto v = Basic();
   v.push_back(F("gamma", 2.2, 0.5, 5));
-  v.push_back(S("exposure_mode", "manual", {"manual"}));
+  // Exposure and motion blur: CARLA's attributes and defaults (exposure.h, Camera).
+  v.push_back(S("exposure_mode", "histogram", {"manual", "histogram"}));
   v.push_back(F("exposure_compensation", 0, -10, 10));
+  v.push_back(F("exposure_min_bright", 10, -10, 20));
+  v.push_back(F("exposure_max_bright", 12, -10, 20));
+  v.push_back(F("exposure_speed_up", 3, 0, 100));
+  v.push_back(F("exposure_speed_down", 1, 0, 100));
+  v.push_back(F("calibration_constant", 16, 0.01, 1000));
+  v.push_back(F("shutter_speed", 200, 0.001, 1e6));
+  v.push_back(F("iso", 100, 1, 1e6));
+  v.push_back(F("fstop", 1.4, 0.1, 64));
+  v.push_back(F("motion_blur_intensity", 0.45, 0, 1));
+  v.push_back(F("motion_blur_max_distortion", 0.35, 0, 100));
+  v.push_back(F("motion_blur_min_object_screen_size", 0.1, 0, 1));
   v.push_back(B("enable_postprocess_effects", true));
   return v;
 }
@@ -128,8 +140,24 @@ CameraSettings ParseCamera(const std::string& blueprint, const std::map<std::str
   s.camera.lens_y_size = number("lens_y_size");
   if (Find(*bp, "gamma")) {
     s.camera.gamma = number("gamma");
-    choice("exposure_mode");
+    s.exposure.histogram = choice("exposure_mode") == "histogram";
     s.camera.exposure_compensation = number("exposure_compensation");
+    s.exposure.min_bright = number("exposure_min_bright");
+    s.exposure.max_bright = number("exposure_max_bright");
+    if (s.exposure.min_bright > s.exposure.max_bright) {
+      throw std::invalid_argument(blueprint + ": attribute exposure_min_bright = " + text("exposure_min_bright") +
+                                  " is above exposure_max_bright = " + text("exposure_max_bright"));
+    }
+    s.exposure.speed_up = number("exposure_speed_up");
+    s.exposure.speed_down = number("exposure_speed_down");
+    s.exposure.calibration_constant = number("calibration_constant");
+    s.exposure.shutter_speed = number("shutter_speed");
+    s.exposure.iso = number("iso");
+    s.exposure.fstop = number("fstop");
+    s.camera.exposure = AutoExposure(s.exposure).Multiplier();
+    s.camera.motion_blur_intensity = number("motion_blur_intensity");
+    s.camera.motion_blur_max_distortion = number("motion_blur_max_distortion");
+    s.camera.motion_blur_min_object_screen_size = number("motion_blur_min_object_screen_size");
     s.camera.post_process = boolean("enable_postprocess_effects");
   }
   if (blueprint == "sensor.camera.depth" && choice("encoding") == "float") s.kind = ImageKind::kDepthFloat;

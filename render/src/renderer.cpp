@@ -7,6 +7,7 @@
 #include <stdexcept>
 
 #include "gl_util.h"
+#include "lockstep/render/motion_blur.h"
 #include "shaders.h"
 #include "static_scene.h"
 
@@ -145,6 +146,8 @@ struct Renderer::Impl {
   // the distorted outputs are gathered from the read-back into these buffers.
   std::map<std::string, std::vector<std::int32_t>> remaps;
   std::vector<std::uint8_t> lens_out[kOutputs];
+  std::vector<std::uint8_t> blurred;  // the colour output after motion blur
+  bool blur_only_flow = false;        // the pass draws flow for its motion blur only (not an output)
 
   explicit Impl(DevicePreference pref) : context(pref) {
     Programs(0);  // labels only
@@ -345,7 +348,7 @@ struct Renderer::Impl {
     p.Set("u_rain", l.rain);
     p.Set("u_rain_slant", l.rain_slant);
     p.Set("u_clouds", l.clouds);
-    p.Set("u_exposure", static_cast<float>(std::exp2(cam.exposure_compensation)));
+    p.Set("u_exposure", static_cast<float>(cam.exposure * std::exp2(cam.exposure_compensation)));
     p.Set("u_gamma", static_cast<float>(cam.gamma > 0.1 ? cam.gamma : 2.2));
     p.Set("u_vignette", static_cast<float>(cam.lens_circle_multiplier));
     p.Set("u_vignette_falloff", static_cast<float>(cam.lens_circle_falloff));
@@ -520,7 +523,7 @@ struct Renderer::Impl {
     const Eigen::Vector3f eye = cam.pose.position.cast<float>();
     const std::uint64_t before = stats.triangles;
     stats.triangles += statics.Draw(fr, eye, false, tuning.front_to_back, &stats.draw_calls);
-    DrawActors(world, fr);
+    DrawActors(world, fr, &cam);
     if (!count) stats.triangles = before;
     if (!draw_sky) return;
     // Sky where nothing was drawn.
@@ -574,8 +577,11 @@ struct Renderer::Impl {
     scene.SetInt("u_spot_count", spots);
   }
 
-  void DrawActors(const WorldView& world, const Frustum& fr) {
+  // cam: the camera of the pass; where its flow only feeds its motion blur, actors smaller
+  // on screen than motion_blur_min_object_screen_size get no motion of their own.
+  void DrawActors(const WorldView& world, const Frustum& fr, const Camera* cam) {
     gl::Program& scene = *scene_ptr;
+    const bool blur_only = cam && blur_only_flow;
     glBindVertexArray(model_vao);
     for (const ActorDraw& a : world.actors) {
       auto it = models.find(a.model);
@@ -584,7 +590,13 @@ struct Renderer::Impl {
       if (!fr.Visible(a.pose.position.cast<float>(), static_cast<float>(m.half_extents.norm()))) continue;
       if (a.cull_faces) glEnable(GL_CULL_FACE);
       else glDisable(GL_CULL_FACE);
-      const Eigen::Matrix4f model = ModelMatrix(a.pose), prev = ModelMatrix(a.previous_pose.value_or(a.pose));
+      const Eigen::Matrix4f model = ModelMatrix(a.pose);
+      Eigen::Matrix4f prev = ModelMatrix(a.previous_pose.value_or(a.pose));
+      if (blur_only) {
+        const double depth = (a.pose.position - cam->pose.position).dot(cam->pose.orientation * Vec3::UnitX());
+        const double width = depth > kNearPlane ? 2 * m.half_extents.norm() * cam->Focal() / depth : 1e30;  // px
+        if (width < cam->motion_blur_min_object_screen_size * cam->width) prev = model;
+      }
       scene.Set("u_model", model);
       scene.Set("u_prev_model", prev);
       scene.Set("u_paint", Eigen::Vector3f(a.paint[0] / 255.0f, a.paint[1] / 255.0f, a.paint[2] / 255.0f));
@@ -681,7 +693,8 @@ struct Renderer::Impl {
     glFlush();
   }
 
-  void Deliver(std::size_t index, const Camera& cam, int slot, const Sink& sink) {
+  // requested: the outputs the caller asked for (the pass may have drawn more).
+  void Deliver(std::size_t index, const Camera& cam, std::uint32_t requested, int slot, const Sink& sink) {
     glClientWaitSync(fences[slot], GL_SYNC_FLUSH_COMMANDS_BIT, 10'000'000'000ull);
     CameraImages im;
     im.width = cam.width;
@@ -696,11 +709,16 @@ struct Renderer::Impl {
       if (!mapped[i]) throw std::runtime_error("render: mapping a read-back buffer failed");
     }
     if (cam.HasLensDistortion()) Distort(cam, mapped);
+    if (cam.HasMotionBlur() && mapped[0] && mapped[4]) {
+      ApplyMotionBlur(cam, static_cast<const std::uint8_t*>(mapped[0]), static_cast<const float*>(mapped[4]), cam.width, cam.height,
+                      &blurred);
+      mapped[0] = blurred.data();
+    }
     im.color = static_cast<const std::uint8_t*>(mapped[0]);
     im.labels = static_cast<const std::uint8_t*>(mapped[1]);
     im.depth = static_cast<const float*>(mapped[2]);
     im.normals = static_cast<const std::uint8_t*>(mapped[3]);
-    im.flow = static_cast<const float*>(mapped[4]);
+    im.flow = (requested & kOutFlow) ? static_cast<const float*>(mapped[4]) : nullptr;
     sink(index, im);
     for (int i = 0; i < kOutputs; ++i) {
       if (!mapped[i]) continue;
@@ -752,13 +770,19 @@ void Renderer::Render(const std::vector<Camera>& cameras, const WorldView& world
   if (cameras.empty()) return;
   const bool colour = std::any_of(cameras.begin(), cameras.end(), [](const Camera& c) { return (c.outputs & kOutColor) != 0; });
   const auto shadow_vp = colour ? s.DrawShadows(l, world, cameras.front().pose.position) : std::nullopt;
-  for (std::size_t i = 0; i < cameras.size(); ++i) {
-    const int slot = static_cast<int>(i % kSlots);
-    s.DrawCamera(cameras[i], world, l, shadow_vp);
-    s.StartReadback(cameras[i], slot);
-    if (i >= 1) s.Deliver(i - 1, cameras[i - 1], static_cast<int>((i - 1) % kSlots), sink);
+  // A camera with motion blur draws and reads back its flow too (the blur's input).
+  std::vector<Camera> passes = cameras;
+  for (Camera& c : passes) {
+    if (c.HasMotionBlur()) c.outputs |= kOutFlow;
   }
-  s.Deliver(cameras.size() - 1, cameras.back(), static_cast<int>((cameras.size() - 1) % kSlots), sink);
+  for (std::size_t i = 0; i < passes.size(); ++i) {
+    const int slot = static_cast<int>(i % kSlots);
+    s.blur_only_flow = passes[i].HasMotionBlur() && !(cameras[i].outputs & kOutFlow);
+    s.DrawCamera(passes[i], world, l, shadow_vp);
+    s.StartReadback(passes[i], slot);
+    if (i >= 1) s.Deliver(i - 1, passes[i - 1], cameras[i - 1].outputs, static_cast<int>((i - 1) % kSlots), sink);
+  }
+  s.Deliver(passes.size() - 1, passes.back(), cameras.back().outputs, static_cast<int>((passes.size() - 1) % kSlots), sink);
 }
 
 std::vector<CameraFrame> Renderer::RenderFrames(const std::vector<Camera>& cameras, const WorldView& world) {

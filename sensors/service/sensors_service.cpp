@@ -224,6 +224,7 @@ void SensorsService::BeginRun(const msg::WorldInfo& world) {
   air_in_run_ = !air.empty();
   for (const auto* list : {&ground, &walkers, &air}) event_publishers_.insert(list->begin(), list->end());
   world_ = std::make_unique<s::SensorWorld>(seed_, geo_);
+  props_.clear();
   world_->set_weather(weather_);
   if (town_meshes_) world_->scene().SetStatic(*town_meshes_);
   files_.reset();
@@ -248,6 +249,10 @@ void SensorsService::Apply(const msg::Command& c, const msg::FrameStamp& stamp) 
   switch (b._d()) {
     case msg::CommandKind::CMD_SPAWN_ACTOR: {
       const auto& sp = b.spawn_actor();
+      if (sp.blueprint().to_string().rfind("custom.", 0) == 0) {
+        AddCustomProp(sp, stamp);
+        return;
+      }
       if (!Owns(sp)) return;
       s::SensorSpawn spawn;
       spawn.id = sp.actor();
@@ -258,13 +263,37 @@ void SensorsService::Apply(const msg::Command& c, const msg::FrameStamp& stamp) 
       if (std::string why = world_->Add(spawn); !why.empty()) Fail(stamp, sp.actor(), "spawn failed: " + why);
       return;
     }
-    case msg::CommandKind::CMD_DESTROY_ACTOR: world_->Remove(b.destroy_actor().actor()); return;
+    case msg::CommandKind::CMD_DESTROY_ACTOR:
+      world_->Remove(b.destroy_actor().actor());
+      props_.erase(b.destroy_actor().actor());
+      return;
     case msg::CommandKind::CMD_SET_WEATHER:
       weather_ = s::Weather{b.weather().precipitation(), b.weather().fog_density()};
       world_->set_weather(weather_);
       return;
     default: return;
   }
+}
+
+void SensorsService::AddCustomProp(const msg::SpawnActor& sp, const msg::FrameStamp& stamp) {
+  const std::string bp = sp.blueprint().to_string();
+  for (const auto& [service, set] : declarations_.Live()) {
+    for (const auto& d : set.blueprints()) {
+      if (d.id().to_string() != bp) continue;
+      // Tags "custom,<name>,<Class>" (render/service): the class gives the semantic tag.
+      const std::string tags = d.tags().to_string();
+      const auto last = tags.rfind(',');
+      const int tag = last == std::string::npos ? -1 : s::TagFromClassName(tags.substr(last + 1));
+      CustomProp p;
+      p.parent = sp.parent();
+      p.transform = ToPose(sp.transform());
+      p.half_extents = ToVec(d.half_extents());
+      p.tag = static_cast<uint8_t>(tag >= 0 ? tag : 20);  // Static when the class is not given
+      props_[sp.actor()] = p;
+      return;
+    }
+  }
+  Fail(stamp, sp.actor(), "custom prop '" + bp + "': no live service declares it; sensors do not see it");
 }
 
 s::WorldFrame SensorsService::Gather(const msg::Tick& tick, uint64_t frame, s::FrameEvents* events) {
@@ -314,6 +343,30 @@ s::WorldFrame SensorsService::Gather(const msg::Tick& tick, uint64_t frame, s::F
       a.angular_velocity = a.pose.orientation * ToVec(d.angular_velocity());  // body -> world
       f.actors.push_back(std::move(a));
     }
+  }
+  // Custom props: their declared box at the spawn transform, relative to the parent's mount
+  // as the render service draws them (vehicles and walkers: the bottom of their box).
+  for (const auto& [id, p] : props_) {
+    s::Actor a;
+    a.id = id;
+    a.kind = s::ActorKind::kOther;
+    a.tag = p.tag;
+    a.half_extents = p.half_extents;
+    a.pose = p.transform;
+    if (p.parent) {
+      const s::Actor* parent = nullptr;
+      for (const auto& c : f.actors) {
+        if (c.id == p.parent) parent = &c;
+      }
+      if (!parent) continue;  // the parent is not in this frame
+      s::Pose mount = parent->pose;
+      if (parent->kind == s::ActorKind::kVehicle || parent->kind == s::ActorKind::kWalker) {
+        mount.position = parent->pose.Apply(s::Vec3(0, 0, -parent->half_extents.z()));
+      }
+      a.pose = mount.Compose(p.transform);
+      a.velocity = parent->velocity;
+    }
+    f.actors.push_back(std::move(a));
   }
   std::sort(f.actors.begin(), f.actors.end(), [](const s::Actor& a, const s::Actor& b) { return a.id < b.id; });
   if (world_->HasEventSensors() && !event_publishers_.empty()) {

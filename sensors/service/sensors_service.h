@@ -62,6 +62,16 @@ class SensorsService final : public ServiceCore {
   sensors::WorldFrame Gather(const msg::Tick& tick, uint64_t frame, sensors::FrameEvents* events);
   void Publish(const sensors::StepOutput& out, const msg::FrameStamp& stamp);
   void Fail(const msg::FrameStamp& stamp, uint32_t actor, const std::string& why);
+  // A spawn of a custom.<name> prop another service declared (the render service's
+  // imported assets): kept as a box with the declared extents and semantic class.
+  void AddCustomProp(const msg::SpawnActor& spawn, const msg::FrameStamp& stamp);
+
+  struct CustomProp {
+    uint32_t parent = 0;
+    sensors::Pose transform;  // relative to the parent's mount (world if none)
+    sensors::Vec3 half_extents;
+    uint8_t tag = 0;
+  };
 
   std::string name_;
   SensorsOptions options_;
@@ -74,6 +84,7 @@ class SensorsService final : public ServiceCore {
   sensors::Weather weather_;
   std::unique_ptr<sensors::SensorWorld> world_;
   std::unique_ptr<SampleWriter> files_;
+  std::map<uint32_t, CustomProp> props_;  // custom props spawned in this run, by actor id
 
   // The town: meshes and geo reference of the current map, kept across runs.
   std::mutex map_mu_;

@@ -1,7 +1,9 @@
 #include "lockstep/sensors/types.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <iterator>
 
 namespace lockstep::sensors {
 
@@ -13,6 +15,7 @@ Pose MakePose(double x, double y, double z, double yaw, double pitch, double rol
 }
 
 uint8_t ActorTag(const Actor& a) {
+  if (a.tag) return a.tag;
   auto has = [&](const char* s) { return a.blueprint.find(s) != std::string::npos; };
   switch (a.kind) {
     case ActorKind::kWalker: return 12;  // Pedestrian
@@ -26,6 +29,23 @@ uint8_t ActorTag(const Actor& a) {
     case ActorKind::kOther: return 22;  // Other
   }
   return 0;
+}
+
+int TagFromClassName(const std::string& name) {
+  // CARLA 0.9.14+ classes, ids 0..28 (as the renderer's palette).
+  static const char* const kNames[] = {"Unlabeled", "Roads",      "SideWalks", "Building",  "Wall",      "Fence",     "Pole",
+                                       "TrafficLight", "TrafficSign", "Vegetation", "Terrain", "Sky",      "Pedestrian", "Rider",
+                                       "Car",       "Truck",      "Bus",       "Train",     "Motorcycle", "Bicycle", "Static",
+                                       "Dynamic",   "Other",      "Water",     "RoadLine",  "Ground",    "Bridge",    "RailTrack",
+                                       "GuardRail"};
+  auto lower = [](std::string s) {
+    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return s;
+  };
+  for (int i = 0; i < static_cast<int>(std::size(kNames)); ++i) {
+    if (lower(kNames[i]) == lower(name)) return i;
+  }
+  return -1;
 }
 
 HitKind ActorHitKind(ActorKind k) {

@@ -33,7 +33,7 @@ TEST(CameraConfig, DefaultsAreCarlasAndBadValuesNameTheAttribute) {
   EXPECT_NE(message("sensor.camera.rgb", {{"image_size_x", "0"}}).find("image_size_x"), std::string::npos);
   EXPECT_NE(message("sensor.camera.rgb", {{"image_size_x", "3840"}, {"image_size_y", "2160"}}).find("1920x1080"), std::string::npos);
   EXPECT_NE(message("sensor.camera.airsim", {{"image_type", "Thermal"}}).find("image_type"), std::string::npos);
-  EXPECT_NE(message("sensor.camera.rgb", {{"exposure_mode", "histogram"}}).find("exposure_mode"), std::string::npos);
+  EXPECT_NE(message("sensor.camera.rgb", {{"exposure_mode", "auto"}}).find("exposure_mode"), std::string::npos);
   EXPECT_NE(message("sensor.camera.lidar", {}).find("not a camera"), std::string::npos);
   EXPECT_GE(CameraBlueprints().size(), 8u);
 }

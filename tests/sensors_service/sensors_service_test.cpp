@@ -38,8 +38,11 @@ class SensorsServiceTest : public ::testing::Test {
     c.services.push_back({"sensors_b", "sensors", "", {}, true, true, "never"});
     bus_ = CreateInProcessBus();
     air_reader_ = Reader<msg::AirState>(*bus_, topics::kAirState, [this](const msg::AirState& s, const SampleInfo&) {
-      std::lock_guard<std::mutex> lock(mu_);
-      air_[s.stamp().frame()] = s;
+      {
+        std::lock_guard<std::mutex> lock(mu_);
+        air_[s.stamp().frame()] = s;
+      }
+      cv_.notify_all();
     });
     cloud_reader_ = Reader<msg::PointCloud>(*bus_, topics::kPointCloud, [this](const msg::PointCloud& p, const SampleInfo&) {
       {
@@ -136,9 +139,10 @@ class SensorsServiceTest : public ::testing::Test {
     ASSERT_GE(last, 80u);
     const uint64_t shift = mode == msg::PerceptionMode::PERCEPTION_PIPELINED ? 1 : 0;
     std::unique_lock<std::mutex> lock(mu_);
-    // Samples may be delivered after the FrameDone the observer saw: wait for them (or more).
+    // Samples (and this test's copy of the AirState, one writer: in frame order) may be
+    // delivered after the FrameDone the observer saw: wait for them (or more).
     cv_.wait_for(lock, 10s, [&] {
-      return clouds_[lidar_].size() >= last - shift && clouds_[watcher_].size() >= last - shift && imus_[imu_].size() >= last - shift;
+      return air_.count(last) > 0 && clouds_[lidar_].size() >= last - shift && clouds_[watcher_].size() >= last - shift && imus_[imu_].size() >= last - shift;
     });
     // One sample per sensor per frame, stamped with the frame it shows: k (strict) or k-1.
     for (uint32_t sensor : {lidar_, watcher_}) {
@@ -392,6 +396,113 @@ TEST(SensorsEvents, CollisionAndLaneInvasionStreamsFromPhysicsEvents) {
   EXPECT_EQ(invasions[0].stamp().frame(), 2u);
   ASSERT_EQ(invasions[0].crossed().size(), 1u);
   EXPECT_EQ(invasions[0].crossed()[0].color().to_string(), "white");
+}
+
+
+// A custom prop (an asset the render service imported and declared as custom.<name> with
+// its bounding box and class) is seen by the ray sensors: a semantic LiDAR's rays hit its
+// box and the points carry the prop's actor id and class; once destroyed it is gone.
+TEST(SensorsCustomProps, ALidarHitsTheDeclaredBoxWithItsClass) {
+  auto bus = CreateInProcessBus();
+  std::mutex mu;
+  std::condition_variable cv;
+  std::map<uint64_t, msg::PointCloud> clouds;
+  Reader<msg::PointCloud> reader(*bus, topics::kPointCloud, [&](const msg::PointCloud& p, const SampleInfo&) {
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      clouds[p.stamp().frame()] = p;
+    }
+    cv.notify_all();
+  });
+  Writer<msg::BlueprintSet> sets(*bus, topics::kBlueprints);
+  msg::BlueprintSet render;
+  render.service("render");
+  msg::BlueprintDeclaration crate;
+  crate.id("custom.crate");
+  crate.tags("custom,crate,TrafficSign");  // as render/service declares an imported asset
+  crate.kind(msg::ActorKind::ACTOR_PROP);
+  crate.half_extents().x(1.0);
+  crate.half_extents().y(0.5);
+  crate.half_extents().z(0.75);
+  render.blueprints({crate});
+  sets.Write(render);
+
+  SensorsService service(*bus, "sensors");
+  msg::WorldInfo world;
+  world.run(1);
+  world.seed(3);
+  world.settings(DefaultWorldSettings());
+  world.required_services({msg::ServiceName("sensors")});
+  msg::BlueprintSet own;
+  own.service("sensors");
+  own.blueprints(service.Blueprints());
+  sets.Write(own);
+  service.BeginRun(world);
+
+  const uint32_t kProp = 50, kLidar = 100;
+  for (uint64_t k = 1; k <= 3; ++k) {
+    msg::Tick tick;
+    tick.run(1);
+    tick.frame(k);
+    tick.sim_time(0.05 * k);
+    tick.dt(0.05);
+    std::vector<msg::Command> cmds;
+    if (k == 1) {
+      msg::CommandBody prop = SpawnBody("custom.crate", MakePose(10, 2, 0.75, M_PI / 2), {}, 0);
+      prop.spawn_actor().actor(kProp);
+      prop.spawn_actor().owner("render");
+      msg::CommandBody lidar = SpawnBody("sensor.lidar.ray_cast_semantic", MakePose(0, 0, 0.75),
+                                         {{"channels", "1"}, {"upper_fov", "0"}, {"lower_fov", "0"}, {"range", "50"},
+                                          {"rotation_frequency", "20"}, {"points_per_second", "72000"}},
+                                         0);
+      lidar.spawn_actor().actor(kLidar);
+      lidar.spawn_actor().owner("sensors");
+      for (const auto& b : {prop, lidar}) {
+        msg::Command c;
+        c.body(b);
+        cmds.push_back(c);
+      }
+    }
+    if (k == 3) {
+      msg::DestroyActor d;
+      d.actor(kProp);
+      msg::CommandBody gone;
+      gone.destroy_actor(d);
+      msg::Command c;
+      c.body(gone);
+      cmds.push_back(c);
+    }
+    tick.commands(cmds);
+    service.Step(tick);
+  }
+  std::unique_lock<std::mutex> lock(mu);
+  ASSERT_TRUE(cv.wait_for(lock, 10s, [&] { return clouds.size() >= 3; }));
+  // A full turn per frame (20 Hz at dt 0.05): the crate, turned 90 degrees, spans y in
+  // [1, 3] at x in [9.5, 10.5].
+  auto prop_points = [&](uint64_t frame) {
+    const msg::PointCloud& pc = clouds.at(frame);
+    EXPECT_EQ(pc.format(), msg::PointFormat::POINTS_SEMANTIC);
+    int n = 0;
+    for (uint32_t i = 0; i < pc.point_count(); ++i) {
+      float xyz[3];
+      uint32_t object = 0, tag = 0;
+      std::memcpy(xyz, pc.data().data() + i * 24, 12);
+      std::memcpy(&object, pc.data().data() + i * 24 + 16, 4);
+      std::memcpy(&tag, pc.data().data() + i * 24 + 20, 4);
+      if (object != kProp) continue;
+      ++n;
+      EXPECT_EQ(tag, 8u) << "TrafficSign";
+      // On the declared box (sensor frame = world frame here: FLU at the origin facing +x).
+      EXPECT_GE(xyz[0], 9.5 - 1e-3);
+      EXPECT_LE(xyz[0], 10.5 + 1e-3);
+      EXPECT_GE(xyz[1], 1.0 - 1e-3);
+      EXPECT_LE(xyz[1], 3.0 + 1e-3);
+    }
+    return n;
+  };
+  EXPECT_GT(prop_points(1), 10);
+  EXPECT_GT(prop_points(2), 10);
+  EXPECT_EQ(prop_points(3), 0) << "destroyed at frame 3";
 }
 
 }  // namespace

@@ -23,7 +23,8 @@ struct Camera {
   std::optional<Pose> previous_pose;  // pose of the previous rendered frame (optical flow)
   std::uint32_t outputs = kOutColor;
   // Exposure and lens (CARLA attributes of the same names).
-  double exposure_compensation = 0.0;  // EV: colour scaled by 2^ev
+  double exposure = 1.0;               // linear colour multiplier before the tone map (see exposure.h)
+  double exposure_compensation = 0.0;  // EV: colour scaled by 2^ev on top of `exposure`
   double gamma = 2.2;
   double lens_circle_falloff = 5.0;
   double lens_circle_multiplier = 0.0;  // 0: no vignetting and no distortion (CARLA's default)
@@ -34,15 +35,27 @@ struct Camera {
   double lens_x_size = 0.08;
   double lens_y_size = 0.08;
   bool post_process = true;             // weather effects on the colour (rain streaks)
+  // Motion blur of the colour output (CARLA's attributes; 0 intensity: none, the default
+  // here, 0.45 from a blueprint as in CARLA): each pixel averages the image along
+  // intensity x its motion since the previous image (the optical flow), at most
+  // max_distortion % of the image width long; actors narrower on screen than
+  // min_object_screen_size x the width blur by the camera's motion only.
+  double motion_blur_intensity = 0.0;
+  double motion_blur_max_distortion = 0.35;
+  double motion_blur_min_object_screen_size = 0.1;
   std::uint64_t noise_seed = 0;         // seeds rain streaks: run seed ^ sensor id
 
   double Focal() const;  // px
   bool HasLensDistortion() const;  // lens_circle_multiplier > 0 and lens_k or lens_kcube not 0
+  bool HasMotionBlur() const;      // colour output, motion_blur_intensity and max_distortion > 0
 };
 
 // True if two cameras at one pose give the same images from one pass: same size, field of
-// view, lens and exposure.
+// view and lens, and where both output colour, the same colour settings (gamma, exposure,
+// post-processing, motion blur).
 bool SameLens(const Camera& a, const Camera& b);
+// Copies the colour settings of `src` (a camera with colour joining the pass of `dst`).
+void TakeColourSettings(Camera& dst, const Camera& src);
 
 // Lens distortion: the output pixel (u, v) (continuous, pixel centres at +0.5) shows what
 // the pinhole image shows at the returned position. With x = (u - W/2) / (W/2) and

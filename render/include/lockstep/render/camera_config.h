@@ -8,6 +8,7 @@
 
 #include "lockstep/render/camera.h"
 #include "lockstep/render/dvs.h"
+#include "lockstep/render/exposure.h"
 #include "lockstep/render/images.h"
 
 namespace lockstep::render {
@@ -36,6 +37,7 @@ struct CameraSettings {
   double sensor_tick = 0;     // s between images; 0 = every frame
   bool paper_classes = false; // semantic: the 2017 paper's 12 classes instead of CARLA's 29
   DvsParams dvs;
+  ExposureSettings exposure;  // colour cameras; camera.exposure is its first image's multiplier
 };
 
 // Largest image payload (bytes) a frame may carry: 1920 x 1080 x 4.

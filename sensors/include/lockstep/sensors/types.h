@@ -38,11 +38,15 @@ struct Actor {
   Vec3 half_extents = Vec3(0.5, 0.5, 0.5);     // m, box half sizes along body x, y, z
   Vec3 velocity = Vec3::Zero();                // m/s, world
   Vec3 angular_velocity = Vec3::Zero();        // rad/s, world
+  uint8_t tag = 0;                             // CARLA semantic tag if set (custom props); 0: from kind and blueprint
 };
 
 // CARLA semantic tag of an actor (Car, Truck, Bus, Motorcycle, Bicycle, Pedestrian; drones
 // have no CARLA class: Dynamic).
 uint8_t ActorTag(const Actor& a);
+// CARLA's semantic tag of a class name ("Static", "Vehicles" is not one: "Car"), case
+// insensitive; -1 if unknown.
+int TagFromClassName(const std::string& name);
 HitKind ActorHitKind(ActorKind k);
 
 // The actors of one frame, sorted by id.

@@ -158,7 +158,8 @@ struct Client::Impl {
   std::deque<Watched> watched;
   std::map<std::tuple<uint32_t, uint64_t, uint32_t>, std::string> service_failures;
   uint64_t next_seq = 1;
-  uint64_t quiet_reply = 0;  // tick() waits for this reply and the FrameDone it names: the reply alone need not wake it
+  uint64_t quiet_reply = 0;
+  uint64_t pings_upto = 0;   // replies to our connection pings (sequence numbers up to this) are dropped  // tick() waits for this reply and the FrameDone it names: the reply alone need not wake it
   uint64_t next_drone_command = 1;
   uint64_t drone_id_base = 0;
 
@@ -363,6 +364,28 @@ struct Client::Impl {
       cv.wait_for(lock, std::chrono::milliseconds(5));
       lock.unlock();
     }
+    // Each side discovers the other's endpoints on its own: our reader may see the
+    // coordinator's reply writer before that writer sees our reader, and a reply written
+    // before then is lost (VOLATILE). A reply proves both directions: ping (CMD_TICK with
+    // count 0, answered in any mode, no effect) every 100 ms until one is answered.
+    for (bool answered = false; !answered;) {
+      msg::CommandBody ping;
+      msg::TickRequest none;
+      none.count(0);
+      ping.tick_request(none);
+      const uint64_t seq = Send(std::move(ping));
+      lock.lock();
+      answered = WaitOn(frame_cv, lock, std::min(deadline, Deadline(0.1)), [&] { return replies.count(seq) > 0; });
+      if (answered) {
+        pings_upto = seq;
+        replies.erase(replies.begin(), replies.upper_bound(seq));
+      }
+      lock.unlock();
+      if (!answered && Clock::now() > deadline) {
+        throw ClientError("the coordinator on DDS domain " + std::to_string(options.domain) + " does not answer commands (no reply within " +
+                          Fmt(options.timeout_s) + " s)");
+      }
+    }
     // The latest ground / air state is kept by their writers (TRANSIENT_LOCAL): wait for it,
     // so actors spawned before we joined are known at once (bounded: a stalled run has none).
     lock.lock();
@@ -382,6 +405,7 @@ struct Client::Impl {
 
   // --- callbacks (mu held) ---
   void OnReply(const msg::CommandReply& r) {
+    if (r.sequence_number() <= pings_upto) return;  // a late answer to a connection ping
     replies[r.sequence_number()] = r;
     auto it = pending_spawns.find(r.sequence_number());
     if (it == pending_spawns.end()) return;

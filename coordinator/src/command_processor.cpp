@@ -258,6 +258,7 @@ std::string CommandProcessor::Check(const msg::Command& cmd, bool synchronous) c
     case CommandKind::CMD_RESET:
       return {};
     case CommandKind::CMD_TICK:
+      if (b.tick_request().count() == 0) return {};  // a ping: answered in any mode, no effect
       if (!synchronous) return "tick requests need synchronous_mode; the world is free-running";
       return InRange("tick count", b.tick_request().count(), 1, 1e6);
     // ground_sim's commands: the actor and finite values here, the rest in the service.

@@ -230,6 +230,12 @@ TEST_F(CommandProcessorTest, TickRequestsNeedSynchronousMode) {
   EXPECT_TRUE(sync.accepted());
   EXPECT_EQ(sync.frame(), 12u) << "next frame 10 plus two more";
   EXPECT_FALSE(p.HasPending()) << "services never see tick requests";
+  // Count 0 is a ping (a client checks that replies reach it): answered in either mode.
+  t.count(0);
+  b.tick_request(t);
+  EXPECT_TRUE(Submit(Make(b), false).accepted());
+  EXPECT_TRUE(Submit(Make(b), true).accepted());
+  EXPECT_FALSE(p.HasPending());
 }
 
 TEST_F(CommandProcessorTest, AcceptedCommandsKeepAcceptanceOrder) {

@@ -119,8 +119,7 @@ flat out vec3 v_albedo;
 flat out uint v_label;
 flat out uint v_material;
 #ifdef OUT_FLOW
-out vec4 v_clip;
-out vec4 v_prev_clip;
+out vec4 v_prev_clip;  // the current position is the pixel's own (gl_FragCoord)
 #endif
 out float v_depth;
 void main() {
@@ -135,7 +134,6 @@ void main() {
   v_depth = -(u_view * w).z;
   gl_Position = u_view_proj * w;
 #ifdef OUT_FLOW
-  v_clip = gl_Position;
   v_prev_clip = u_prev_view_proj * (u_prev_model * vec4(a_pos, 1.0));
 #endif
 }
@@ -151,7 +149,6 @@ flat in vec3 v_albedo;
 flat in uint v_label;
 flat in uint v_material;
 #ifdef OUT_FLOW
-in vec4 v_clip;
 in vec4 v_prev_clip;
 #endif
 in float v_depth;
@@ -189,7 +186,9 @@ void main() {
   o_normal = vec4(0.0);
 #endif
 #ifdef OUT_FLOW
-  vec2 ndc = v_clip.xy / v_clip.w, prev = v_prev_clip.xy / v_prev_clip.w;
+  // The pixel centre in NDC (rows are flipped by the projection, so y up in NDC is y up
+  // in the framebuffer): four interpolated floats fewer than the clip position.
+  vec2 ndc = gl_FragCoord.xy / u_size * 2.0 - 1.0, prev = v_prev_clip.xy / v_prev_clip.w;
   o_flow = ndc - prev;
 #else
   o_flow = vec2(0.0);

@@ -82,6 +82,24 @@ TEST(MotionBlur, TheFlowOutputIsOnlyGivenWhenAsked) {
   const CameraFrame with_flow = CarShot(1, true, 0.1, kOutFlow);
   ASSERT_FALSE(with_flow.flow.empty());
   EXPECT_EQ(with_flow.color, CarShot(1, true, 0.1).color);
+  // The car moved 1.5 m to the camera's right at 9-11 m: 11-13.3 px (focal 80 px); the
+  // still background does not move.
+  int car = 0;
+  for (int v = 0; v < with_flow.height; ++v) {
+    for (int u = 0; u < with_flow.width; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * with_flow.width + u;
+      const float px = with_flow.flow[i * 2] * with_flow.width / 2, py = with_flow.flow[i * 2 + 1] * with_flow.height / 2;
+      if (with_flow.Instance(u, v) == 30) {
+        ++car;
+        EXPECT_NEAR(px, 12.2, 1.3) << u << "," << v;
+        EXPECT_NEAR(py, 0.0, 0.3) << u << "," << v;
+      } else {
+        EXPECT_NEAR(px, 0.0, 1e-3) << u << "," << v;
+        EXPECT_NEAR(py, 0.0, 1e-3) << u << "," << v;
+      }
+    }
+  }
+  EXPECT_GT(car, 200);
 }
 
 TEST(Exposure, ManualExposureFollowsTheExposureFormula) {

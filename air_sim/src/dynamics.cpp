@@ -103,6 +103,7 @@ void ResetToSpawn(const DroneModel& dm, DroneState* s) {
   s->total_thrust = 0;
   s->armed = false;
   s->grounded = false;
+  s->carrier = 0;
   s->gust.setZero();
   const ControllerGains gains = s->controller.gains;
   s->controller = ControllerState{};
@@ -346,6 +347,7 @@ void PhysicsSubstep(const World& model, const DroneModel& dm, DroneState* s, con
       }
     }
     if (s->grounded && (support < 0 || total_thrust >= m * model.gravity)) s->grounded = false;
+    if (!s->grounded) s->carrier = 0;
     if (!s->grounded && support >= 0) {
       const Vec3 vrel = v0 - contacts[support].cp.object_velocity;
       const Vec3 up_body = rot.transpose() * contacts[support].cp.normal;
@@ -365,19 +367,35 @@ void PhysicsSubstep(const World& model, const DroneModel& dm, DroneState* s, con
           if (vb.id == c.cp.object_id) carrier = &vb;
         }
       }
-      if (carrier != nullptr) {
+      if (carrier != nullptr && s->carrier == carrier->id) {
+        // Riding: the pose it locked at, in the carrier's frame, carried to the carrier's pose
+        // at the sub-step's end. The carrier's pose is read again every tick (its GroundState),
+        // so the extrapolation's errors do not add up into a slide over the roof.
+        const Pose cp = ExtrapolateVehicle(*carrier, t_tick + h);
+        s->position = cp.position + cp.orientation * s->carrier_offset;
+        const Mat3 cr = cp.orientation.toRotationMatrix();
+        yaw = std::atan2(cr(1, 0), cr(0, 0)) + s->carrier_yaw;
+      } else if (carrier != nullptr) {
         const Vec3 centre = carrier->pose.position + carrier->velocity * t_tick;
         const Vec3 turn = carrier->angular_velocity * h;
         const Quat q = turn.norm() > 0 ? Quat(Eigen::AngleAxisd(turn.norm(), turn.normalized())) : Quat::Identity();
         s->position = centre + carrier->velocity * h + q * (s->position - centre);
         yaw += turn.z();
+        // Out of the surface, along its normal (the deepest support contact); then locked.
+        const double excess = c.cp.depth - kSlop;
+        if (excess > 0) s->position += c.cp.normal * excess;
+        const Pose cp = ExtrapolateVehicle(*carrier, t_tick + h);
+        const Mat3 cr = cp.orientation.toRotationMatrix();
+        s->carrier = carrier->id;
+        s->carrier_offset = cp.orientation.conjugate() * (s->position - cp.position);
+        s->carrier_yaw = yaw - std::atan2(cr(1, 0), cr(0, 0));
       } else {
+        s->carrier = 0;
         s->position += v_surface * h;
+        const double excess = c.cp.depth - kSlop;
+        if (excess > 0) s->position += c.cp.normal * excess;
       }
       s->orientation = Quat(Eigen::AngleAxisd(yaw, Vec3::UnitZ()));
-      // Out of the surface, along its normal (the deepest support contact).
-      const double excess = c.cp.depth - kSlop;
-      if (excess > 0) s->position += c.cp.normal * excess;
       s->acceleration = (v_surface - v0) / h;
       s->angular_acceleration = -w0 / h;
       s->velocity = v_surface;

@@ -364,6 +364,7 @@ void ApplyCommand(Ctx& c, const Command& cm, double t) {
             ds.velocity = sk.velocity;
             ds.angular_velocity = sk.angular_velocity;
             ds.grounded = false;
+            ds.carrier = 0;
             ds.controller.yaw_ref = YawOf(ds.orientation);
             if (ds.armed) EnterHold(ds, ds.position);
             else ac.mode = CommandMode::kIdle;
@@ -375,6 +376,7 @@ void ApplyCommand(Ctx& c, const Command& cm, double t) {
             ds.velocity.setZero();
             ds.angular_velocity.setZero();
             ds.grounded = false;
+            ds.carrier = 0;
             ds.controller.yaw_ref = YawOf(ds.orientation);
             ds.controller.vz_integral = 0;
             ds.controller.vxy_integral.setZero();
@@ -909,6 +911,9 @@ std::uint64_t StateHash(const WorldState& state) {
     }
     mixb(d.armed);
     mixb(d.grounded);
+    mix(&d.carrier, sizeof d.carrier);
+    mixv(d.carrier_offset);
+    mixd(d.carrier_yaw);
     mix(&d.landed, sizeof d.landed);
     mixd(d.last_support_time);
     mixv(d.support_velocity);

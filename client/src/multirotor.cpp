@@ -141,6 +141,10 @@ msg::DroneCommand MultirotorClient::Make(uint32_t actor, msg::DroneCommandKind k
     throw ClientError("drone " + std::to_string(actor) +
                       " is not under API control: call enableApiControl(True) first (as in AirSim)");
   }
+  return MakeUnchecked(actor, kind);
+}
+
+msg::DroneCommand MultirotorClient::MakeUnchecked(uint32_t actor, msg::DroneCommandKind kind) const {
   msg::DroneCommand c;
   c.actor(actor);
   c.kind(kind);
@@ -386,8 +390,10 @@ void MultirotorClient::setControllerGains(msg::GainsLoop loop, const Pid& a, con
 }
 
 void MultirotorClient::simSetWind(const Ned& wind) {
-  const uint32_t id = Resolve("");  // any drone carries it: the wind is every drone's
-  auto c = Make(id, msg::DroneCommandKind::DRONE_SET_WIND);
+  // The wind is every drone's and AirSim's simSetWind needs no API control, so any drone carries
+  // the command (the first one may be a drone this client never enabled).
+  const uint32_t id = Resolve("");
+  auto c = MakeUnchecked(id, msg::DroneCommandKind::DRONE_SET_WIND);
   c.target(V(wind.y, wind.x, -wind.z));
   Send(id, c);
 }

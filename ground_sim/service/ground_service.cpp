@@ -45,6 +45,7 @@ GroundService::GroundService(Bus& bus, std::string name, std::string output_dir)
       events_writer_(bus, topics::kPhysicsEvents),
       event_writer_(bus, topics::kEvent),
       air_(bus, topics::kAirState),
+      declarations_(bus),
       map_reader_(bus, topics::kMap, [this](const msg::MapData& m, const SampleInfo&) {
         {
           std::lock_guard<std::mutex> lock(map_mu_);
@@ -126,7 +127,10 @@ void GroundService::Fail(uint32_t actor, const std::string& why) {
 void GroundService::Spawn(const msg::SpawnActor& s) {
   const std::string owner = s.owner().to_string();
   const std::string bp = CarlaId(s.blueprint().to_string());
-  if (!owner.empty() ? owner != name_ : !IsMine(bp)) return;
+  if (!owner.empty() ? owner != name_ : !IsMine(bp)) {
+    SpawnProp(s, bp);
+    return;
+  }
   const auto attrs = Attributes(s);
   std::string why;
   if (bp == ground::kWalkerControllerBlueprint) {
@@ -141,6 +145,35 @@ void GroundService::Spawn(const msg::SpawnActor& s) {
     why = "ground_sim does not simulate '" + bp + "'";
   }
   if (!why.empty()) Fail(s.actor(), "spawn of " + bp + " failed: " + why);
+}
+
+void GroundService::SpawnProp(const msg::SpawnActor& s, const std::string& bp) {
+  // The coordinator accepted the spawn, so some service declared the blueprint; its set may
+  // reach this reader a moment after the tick (TRANSIENT_LOCAL): wait for it, bounded.
+  std::optional<msg::BlueprintDeclaration> decl;
+  auto find = [&] {
+    for (const auto& [service, set] : declarations_.Live()) {
+      for (const auto& d : set.blueprints()) {
+        if (d.id().to_string() == bp) {
+          decl = d;
+          return true;
+        }
+      }
+    }
+    return false;
+  };
+  if (!find()) declarations_.WaitUntil(find, std::chrono::seconds(5));
+  if (!decl || decl->kind() != msg::ActorKind::ACTOR_PROP) return;
+  const ground::Vec3 half = ToVec(decl->half_extents());
+  if (!(half.array() > 0).all()) return;  // a prop without a bounding box: nothing to collide with
+  if (s.parent() != 0) {
+    Fail(s.actor(), "prop " + bp + " attached to actor " + std::to_string(s.parent()) +
+                        ": ground_sim collides only with unattached props (its box is not added)");
+    return;
+  }
+  if (const std::string why = world_->AddProp(s.actor(), ToPose(s.transform()), half); !why.empty()) {
+    Fail(s.actor(), "prop " + bp + ": " + why);
+  }
 }
 
 void GroundService::Apply(const msg::Command& c) {
@@ -346,37 +379,7 @@ msg::GroundState GroundService::PublishState(const msg::FrameStamp& stamp) const
   msg::GroundState out;
   out.stamp(stamp);
   for (const auto& v : world_->Vehicles()) {
-    msg::VehicleState m;
-    m.actor(v.id);
-    m.blueprint(v.blueprint);
-    m.transform(FromPose(v.pose));
-    m.half_extents(FromVec(v.half_extents));
-    m.velocity(FromVec(v.velocity));
-    m.angular_velocity(FromVec(v.angular_velocity));
-    m.acceleration(FromVec(v.acceleration));
-    msg::VehicleControl c;
-    c.actor(v.id);
-    c.throttle(static_cast<float>(v.control.throttle));
-    c.steer(static_cast<float>(v.control.steer));
-    c.brake(static_cast<float>(v.control.brake));
-    c.hand_brake(v.control.hand_brake);
-    c.reverse(v.control.reverse);
-    c.manual_gear_shift(v.control.manual_gear_shift);
-    c.gear(v.gear);
-    m.control(c);
-    m.autopilot(v.autopilot);
-    m.speed_limit(static_cast<float>(v.speed_limit));
-    m.traffic_light(v.traffic_light);
-    m.stop_line_distance(v.stop_line_distance);
-    m.opposite_lane_fraction(v.opposite_lane);
-    m.sidewalk_fraction(v.sidewalk);
-    m.light_state(v.light_state);
-    m.kinematic(v.kinematic);
-    m.gear(v.gear);
-    m.role_name(v.role_name);
-    m.red_light_infractions(static_cast<uint32_t>(v.infractions.red_lights));
-    m.collision_infractions(
-        static_cast<uint32_t>(v.infractions.vehicle_collisions + v.infractions.walker_collisions + v.infractions.static_collisions));
+    msg::VehicleState m = ground_wire::ToWire(v);
     if (auto p = world_->GetVehiclePhysics(v.id)) m.physics(ground_wire::ToWire(*p));
     out.vehicles().push_back(std::move(m));
   }

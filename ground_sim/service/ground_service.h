@@ -9,6 +9,7 @@
 
 #include "lockstep/ground/run_log.h"
 #include "lockstep/ground/world.h"
+#include "lockstep/runtime/declarations.h"
 #include "lockstep/runtime/frame_buffer.h"
 #include "lockstep/runtime/service.h"
 
@@ -34,6 +35,8 @@ class GroundService final : public ServiceCore {
  private:
   void Apply(const msg::Command& c);
   void Spawn(const msg::SpawnActor& s);
+  // Another service's prop with a declared bounding box becomes a static box here.
+  void SpawnProp(const msg::SpawnActor& s, const std::string& bp);
   void Fail(uint32_t actor, const std::string& why);
   void LoadTown(const msg::WorldInfo& world);
   void ExternalBodies(const msg::Tick& tick);
@@ -47,6 +50,7 @@ class GroundService final : public ServiceCore {
   Writer<msg::PhysicsEvents> events_writer_;
   Writer<msg::SimEvent> event_writer_;
   FrameBuffer<msg::AirState> air_;
+  Declarations declarations_;  // every service's blueprints: the props' bounding boxes
   std::mutex map_mu_;
   std::condition_variable map_cv_;
   std::optional<msg::MapData> map_;

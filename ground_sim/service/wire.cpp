@@ -182,6 +182,50 @@ std::optional<ground::TmParam> FromWire(msg::TrafficManagerParameter p) {
   }
 }
 
+msg::VehicleState ToWire(const ground::VehicleView& v) {
+  msg::VehicleState m;
+  m.actor(v.id);
+  m.blueprint(v.blueprint);
+  m.transform(FromPose(v.pose));
+  m.half_extents(FromVec(v.half_extents));
+  m.velocity(FromVec(v.velocity));
+  m.angular_velocity(FromVec(v.angular_velocity));
+  m.acceleration(FromVec(v.acceleration));
+  msg::VehicleControl c;
+  c.actor(v.id);
+  c.throttle(static_cast<float>(v.control.throttle));
+  c.steer(static_cast<float>(v.control.steer));
+  c.brake(static_cast<float>(v.control.brake));
+  c.hand_brake(v.control.hand_brake);
+  c.reverse(v.control.reverse);
+  c.manual_gear_shift(v.control.manual_gear_shift);
+  c.gear(v.gear);
+  m.control(c);
+  m.autopilot(v.autopilot);
+  m.speed_limit(static_cast<float>(v.speed_limit));
+  m.traffic_light(v.traffic_light);
+  m.stop_line_distance(v.stop_line_distance);
+  m.opposite_lane_fraction(v.opposite_lane);
+  m.sidewalk_fraction(v.sidewalk);
+  m.light_state(v.light_state);
+  m.kinematic(v.kinematic);
+  m.gear(v.gear);
+  m.role_name(v.role_name);
+  m.red_light_infractions(static_cast<uint32_t>(v.infractions.red_lights));
+  const ground::Infractions& f = v.infractions;
+  m.collision_infractions(static_cast<uint32_t>(f.vehicle_collisions + f.walker_collisions + f.static_collisions));
+  m.stop_sign_infractions(static_cast<uint32_t>(f.stop_signs));
+  m.lane_invasions(static_cast<uint32_t>(f.lane_invasions));
+  m.vehicle_collisions(static_cast<uint32_t>(f.vehicle_collisions));
+  m.walker_collisions(static_cast<uint32_t>(f.walker_collisions));
+  m.other_collisions(static_cast<uint32_t>(f.static_collisions));
+  m.opposite_lane_infractions(static_cast<uint32_t>(f.opposite_lane));
+  m.offroad_infractions(static_cast<uint32_t>(f.offroad));
+  m.offroad_fraction(v.offroad);
+  m.distance_driven(f.distance);
+  return m;
+}
+
 std::vector<msg::BlueprintDeclaration> Blueprints() {
   namespace bp = blueprint;
   std::vector<msg::BlueprintDeclaration> out;

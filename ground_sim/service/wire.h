@@ -20,6 +20,8 @@ msg::ObjectKind ToWire(ground::ObjectKind k);
 msg::TrafficLightColor ToWire(ground::LightColor c);
 std::optional<ground::LightColor> FromWire(msg::TrafficLightColor c);
 std::optional<ground::TmParam> FromWire(msg::TrafficManagerParameter p);
+// A vehicle's state on the wire (all but its physics control).
+msg::VehicleState ToWire(const ground::VehicleView& v);
 
 // CARLA-compatible vehicles and walkers, and controller.ai.walker.
 std::vector<msg::BlueprintDeclaration> Blueprints();

@@ -91,7 +91,7 @@ struct VehicleActor {
   map::Footprint footprint{};
   bool has_footprint = false;
   double speed_limit = 30 / 3.6;
-  double opposite_lane = 0, sidewalk = 0;
+  double opposite_lane = 0, sidewalk = 0, offroad = 0;  // footprint fractions
   Infractions infractions;
   bool hero() const { return attributes.role_name == "hero"; }
 };
@@ -133,6 +133,16 @@ struct ExternalActor {
   dGeomID geom = nullptr;
 };
 
+// A static box of another service's actor (a custom prop with the bounding box its
+// blueprint declares): part of the town for collisions, named by its actor id.
+struct PropActor {
+  uint32_t id = 0;
+  Pose pose;
+  Vec3 half_extents = Vec3::Zero();
+  GeomTag tag;
+  dGeomID geom = nullptr;
+};
+
 // What the Traffic Manager sees of another actor at the start of a step.
 struct Obstacle {
   uint32_t id = 0;
@@ -171,6 +181,7 @@ struct World::Impl {
   std::map<uint32_t, std::unique_ptr<WalkerActor>> walkers;
   std::map<uint32_t, ControllerActor> controllers;
   std::vector<std::unique_ptr<ExternalActor>> externals;
+  std::map<uint32_t, std::unique_ptr<PropActor>> props;
   std::vector<LightState> lights;
   std::vector<int> group_current;        // per group: index into its lights of the green one
   std::vector<std::vector<int>> group_lights;

@@ -12,7 +12,8 @@ namespace lockstep::ground {
 namespace {
 
 constexpr uint32_t kMagic = 0x47524E44;  // "GRND"
-constexpr uint32_t kVersion = 3;  // 2: every field written explicitly (no struct padding); 3: stop signs, contacts of the last step, crosswalks
+constexpr uint32_t kVersion = 4;  // 2: every field written explicitly (no struct padding); 3: stop signs, contacts of the last step, crosswalks;
+                                   // 4: benchmark onsets, distance, off-road fraction, props
 
 class Writer {
  public:
@@ -168,14 +169,17 @@ AckermannControl GetAckermann(Reader& r) {
 }
 
 void PutInfractions(Writer& w, const Infractions& f) {
-  for (int x : {f.red_lights, f.vehicle_collisions, f.walker_collisions, f.static_collisions, f.lane_invasions, f.stop_signs})
+  for (int x : {f.red_lights, f.vehicle_collisions, f.walker_collisions, f.static_collisions, f.lane_invasions, f.stop_signs,
+                f.opposite_lane, f.offroad})
     w.Pod<int32_t>(x);
+  w.Pod(f.distance);
 }
 Infractions GetInfractions(Reader& r) {
   Infractions f;
   for (int* x : {&f.red_lights, &f.vehicle_collisions, &f.walker_collisions, &f.static_collisions, &f.lane_invasions,
-                 &f.stop_signs})
+                 &f.stop_signs, &f.opposite_lane, &f.offroad})
     *x = r.Pod<int32_t>();
+  r.Get(&f.distance);
   return f;
 }
 
@@ -313,7 +317,7 @@ std::vector<uint8_t> World::Save() const {
     PutControl(w, v.control), w.Pod(v.use_ackermann), PutAckermann(w, v.ackermann), w.Pod(v.ackermann_integral), w.Pod(v.steer_angle);
     w.Pod(v.simulate_physics), w.Pod(v.kinematic), w.Pod<int32_t>(v.gear), w.Pod(v.gear_timer), w.V(v.prev_velocity), w.V(v.acceleration);
     w.Pod(v.light_state), w.Pod(v.autopilot), PutTm(w, v.tm), PutFootprint(w, v.footprint), w.Pod(v.has_footprint), w.Pod(v.speed_limit);
-    w.Pod(v.opposite_lane), w.Pod(v.sidewalk), PutInfractions(w, v.infractions);
+    w.Pod(v.opposite_lane), w.Pod(v.sidewalk), w.Pod(v.offroad), PutInfractions(w, v.infractions);
   }
   w.Pod<uint32_t>(static_cast<uint32_t>(I.walkers.size()));
   for (const auto& [id, wp] : I.walkers) {
@@ -332,6 +336,8 @@ std::vector<uint8_t> World::Save() const {
   w.Pod(I.cross_factor);
   w.Pod<uint32_t>(static_cast<uint32_t>(I.last_contacts.size()));
   for (const auto& [a, b] : I.last_contacts) w.Pod(a), w.Pod(b);
+  w.Pod<uint32_t>(static_cast<uint32_t>(I.props.size()));
+  for (const auto& [id, p] : I.props) w.Pod(p->id), w.V(p->pose.position), w.Q(p->pose.orientation), w.V(p->half_extents);
   return std::move(w.out);
 }
 
@@ -378,7 +384,8 @@ std::unique_ptr<World> World::Restore(std::shared_ptr<const Town> town, const st
     v.acceleration = r.V();
     r.Get(&v.light_state), r.Get(&v.autopilot);
     GetTm(r, m, &v.tm);
-    v.footprint = GetFootprint(r), r.Get(&v.has_footprint), r.Get(&v.speed_limit), r.Get(&v.opposite_lane), r.Get(&v.sidewalk);
+    v.footprint = GetFootprint(r), r.Get(&v.has_footprint), r.Get(&v.speed_limit), r.Get(&v.opposite_lane), r.Get(&v.sidewalk),
+        r.Get(&v.offroad);
     v.infractions = GetInfractions(r);
   }
   const auto nw = r.Pod<uint32_t>();
@@ -416,6 +423,16 @@ std::unique_ptr<World> World::Restore(std::shared_ptr<const Town> town, const st
   for (uint32_t k = 0; k < ncontacts; ++k) {
     const auto a = r.Pod<uint32_t>();
     I.last_contacts.emplace(a, r.Pod<uint32_t>());
+  }
+  const auto nprops = r.Pod<uint32_t>();
+  for (uint32_t k = 0; k < nprops; ++k) {
+    const auto id = r.Pod<uint32_t>();
+    Pose p;
+    p.position = r.V();
+    p.orientation = r.Q();
+    const Vec3 half = r.V();
+    const std::string err = world->AddProp(id, p, half);
+    if (!err.empty()) throw std::runtime_error("ground state: " + err);
   }
   if (r.at != bytes.size()) throw std::runtime_error("ground state: trailing bytes");
   return world;

@@ -396,8 +396,12 @@ void World::Impl::UpdateMeasurements(double dt) {
         }
       }
       const auto overlap = map::ComputeFootprintOverlap(m, fp, yaw, 4);
+      if (overlap.opposite_lane > kOppositeLaneThreshold && !(v.opposite_lane > kOppositeLaneThreshold))
+        ++v.infractions.opposite_lane;
+      if (overlap.offroad > kOffroadThreshold && !(v.offroad > kOffroadThreshold)) ++v.infractions.offroad;
       v.opposite_lane = overlap.opposite_lane;
       v.sidewalk = overlap.sidewalk;
+      v.offroad = overlap.offroad;
       // The last speed sign passed on the lane it drives (CARLA's sticky vehicle limit).
       if (auto wp = m.NearestWaypoint(p.position); wp) {
         if (std::abs(Wrap(wp->transform.yaw - yaw)) > M_PI / 2) {
@@ -406,6 +410,7 @@ void World::Impl::UpdateMeasurements(double dt) {
         if (const double sign = town->SignSpeedLimit(*wp); std::isfinite(sign)) v.speed_limit = sign;
       }
     }
+    if (v.has_footprint) v.infractions.distance += ((fp[0] + fp[2]) - (v.footprint[0] + v.footprint[2])).norm() / 2;
     v.footprint = fp;
     v.has_footprint = true;
   }
@@ -508,8 +513,38 @@ std::string World::AddWalkerController(uint32_t id, uint32_t walker) {
   return {};
 }
 
+std::string World::AddProp(uint32_t id, const Pose& pose, const Vec3& half_extents) {
+  auto& I = *impl_;
+  if (id == 0) return "prop: actor id 0";
+  if (Has(id) || I.props.count(id)) return "actor " + std::to_string(id) + " already exists";
+  if (!half_extents.allFinite() || (half_extents.array() <= 0).any())
+    return "prop " + std::to_string(id) + ": bounding box half extents must be finite and > 0";
+  if (!pose.position.allFinite() || !pose.orientation.coeffs().allFinite() || pose.orientation.norm() < 1e-9)
+    return "prop " + std::to_string(id) + ": pose must be finite";
+  auto p = std::make_unique<PropActor>();
+  p->id = id;
+  p->pose = pose;
+  p->half_extents = half_extents;
+  p->tag = GeomTag{GeomKind::kStatic, id, map::semantic::kStatic, ObjectKind::kStatic};
+  p->geom = dCreateBox(I.static_space, 2 * half_extents.x(), 2 * half_extents.y(), 2 * half_extents.z());
+  dGeomSetPosition(p->geom, pose.position.x(), pose.position.y(), pose.position.z());
+  const Quat q = pose.orientation.normalized();
+  const dQuaternion dq = {q.w(), q.x(), q.y(), q.z()};
+  dGeomSetQuaternion(p->geom, dq);
+  dGeomSetData(p->geom, &p->tag);
+  I.props.emplace(id, std::move(p));
+  return {};
+}
+
+bool World::IsProp(uint32_t id) const { return impl_->props.count(id) > 0; }
+
 bool World::Remove(uint32_t id) {
   auto& I = *impl_;
+  if (auto it = I.props.find(id); it != I.props.end()) {
+    dGeomDestroy(it->second->geom);
+    I.props.erase(it);
+    return true;
+  }
   if (auto it = I.vehicles.find(id); it != I.vehicles.end()) {
     I.DestroyBody(it->second->body, it->second->geom);
     I.vehicles.erase(it);
@@ -682,7 +717,9 @@ void World::SetExternalBodies(std::vector<ExternalBody> bodies) {
     dMassSetBoxTotal(&m, std::max(0.01, b.mass), 2 * b.half_extents.x(), 2 * b.half_extents.y(), 2 * b.half_extents.z());
     dBodySetMass(e->ode_body, &m);
     SetBodyPose(e->ode_body, b.pose);
-    dBodySetKinematic(e->ode_body);
+    // A dynamic body of its own mass (not kinematic: an infinite mass would press a car's
+    // suspension down under a drone resting on its roof); its motion here is dropped, the
+    // owner simulates it. It meets vehicles and walkers only, never the town.
     dBodySetLinearVel(e->ode_body, b.velocity.x(), b.velocity.y(), b.velocity.z());
     e->geom = dCreateBox(I.actor_space, 2 * b.half_extents.x(), 2 * b.half_extents.y(), 2 * b.half_extents.z());
     dGeomSetBody(e->geom, e->ode_body);
@@ -739,6 +776,7 @@ VehicleView View(const World::Impl& I, const VehicleActor& v) {
   o.stop_line_distance = v.tm.light >= 0 ? v.tm.light_distance : -1;
   o.opposite_lane = v.opposite_lane;
   o.sidewalk = v.sidewalk;
+  o.offroad = v.offroad;
   o.light_state = v.light_state;
   o.gear = v.gear;
   o.infractions = v.infractions;

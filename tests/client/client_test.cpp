@@ -155,7 +155,10 @@ TEST_F(ClientTest, AWatchedCommandTheServiceRefusesIsThrownByTheTickThatAppliesI
   for (int i = 0; i < 3; ++i) EXPECT_NO_THROW(client_->tick());
   client_->SubmitWatched(body(msg::DroneCommandKind::DRONE_TAKEOFF, 2), "takeoffAsync");
   std::string what, reason;
-  for (int i = 0; i < 2 && what.empty(); ++i) {  // the applying tick, or the next if the event came late
+  // The applying tick, or a later one: the refusal event and FrameDone come from different writers,
+  // so under load the event can arrive a tick or two after the frame is done (it failed 2 in 6 loaded
+  // runs with a single tick of slack). It must come, and only once.
+  for (int i = 0; i < 10 && what.empty(); ++i) {
     try {
       client_->tick();
     } catch (const CommandRejected& e) {

@@ -124,6 +124,9 @@ struct DroneState {
   LandedState landed = LandedState::kLanded;
   bool grounded = false;                 // AirSim ground lock: levelled, moving with the surface
                                          // under it, until thrust exceeds weight
+  std::uint32_t carrier = 0;             // grounded on this vehicle (0: none) ...
+  Vec3 carrier_offset = Vec3::Zero();    // m, ... at this position in its box frame,
+  double carrier_yaw = 0;                // rad, ... and this yaw relative to its heading
   double last_support_time = -1;         // s, last contact with a supporting surface
   Vec3 support_velocity = Vec3::Zero();  // m/s, velocity of that surface
   CollisionInfo collision;

@@ -169,6 +169,7 @@ class MultirotorClient {
   msg::DroneState State(uint32_t actor) const;
   CommandFuture Send(uint32_t actor, msg::DroneCommand cmd);
   msg::DroneCommand Make(uint32_t actor, msg::DroneCommandKind kind) const;
+  msg::DroneCommand MakeUnchecked(uint32_t actor, msg::DroneCommandKind kind) const;  // no API-control check
   Client& client_;
   std::map<uint32_t, bool> api_control_;
 };

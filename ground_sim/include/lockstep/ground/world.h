@@ -46,7 +46,16 @@ struct Infractions {
   int static_collisions = 0;
   int lane_invasions = 0;
   int stop_signs = 0;             // crossed a stop sign's line without a full stop first
+  // The 2017 benchmark's intersections (CARLA 0.8 driving_benchmark thresholds): onsets of
+  // more than 40 % of the footprint on the opposite lane, more than 30 % off the road
+  // (sidewalk or no lane).
+  int opposite_lane = 0;
+  int offroad = 0;
+  double distance = 0;            // m driven (horizontal), for distance between infractions
 };
+
+inline constexpr double kOppositeLaneThreshold = 0.4;  // CARLA 0.8 intersection_otherlane
+inline constexpr double kOffroadThreshold = 0.3;       // CARLA 0.8 intersection_offroad
 
 struct VehicleView {
   uint32_t id = 0;
@@ -65,6 +74,7 @@ struct VehicleView {
   double stop_line_distance = -1; // m to that light's stop line, -1 = none
   double opposite_lane = 0;       // fraction of the footprint on the opposite lane
   double sidewalk = 0;            // fraction on the sidewalk
+  double offroad = 0;             // fraction off the drivable road (sidewalk or no lane)
   uint32_t light_state = 0;       // carla.VehicleLightState bits
   int gear = 0;
   Infractions infractions;
@@ -94,7 +104,7 @@ struct ExternalBody {
   Pose pose;
   Vec3 velocity = Vec3::Zero();
   Vec3 half_extents = Vec3(0.3, 0.3, 0.1);
-  double mass = 1.0;              // kg
+  double mass = 1.0;              // kg: a dynamic body of that mass within the step
 };
 
 class World {
@@ -117,6 +127,11 @@ class World {
   std::string AddWalkerController(uint32_t id, uint32_t walker);
   // CARLA's try_spawn_actor: "" if the box at `pose` is free of vehicles and walkers.
   std::string CheckFree(const Pose& pose, const Vec3& half_extents) const;
+  // A static box for another service's actor (a prop whose blueprint declares a bounding
+  // box): vehicles collide with it (events name it, kind static, tag Static), walkers are
+  // blocked by it. Removed by Remove(id).
+  std::string AddProp(uint32_t id, const Pose& pose, const Vec3& half_extents);
+  bool IsProp(uint32_t id) const;
   bool Remove(uint32_t id);
   bool Has(uint32_t id) const;
   bool IsVehicle(uint32_t id) const;

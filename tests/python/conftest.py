@@ -87,3 +87,13 @@ def sim():
     s = Simulation(default_services())
     yield s
     s.stop()
+
+
+@pytest.fixture(scope='module')
+def world(sim):
+    """The world of the module's simulation through the drop-in carla client (a module may
+    override it, as test_world.py does to switch synchronous mode on)."""
+    import carla
+    client = carla.Client('localhost', 2000)
+    client.set_timeout(30)
+    return client.get_world()

@@ -15,13 +15,6 @@ from conftest import has_service
 pytestmark = pytest.mark.skipif(not has_service('ground_sim'), reason='needs the ground_sim service')
 
 
-@pytest.fixture(scope='module')
-def world(sim):
-    client = carla.Client('localhost', 2000)
-    client.set_timeout(30)
-    return client.get_world()
-
-
 def _speed(actor):
     return actor.get_velocity().length()
 

@@ -126,6 +126,39 @@ TEST(GroundWalkerNav, GoToLocationCrossesTheRoadAtTheCrossingOnTheWalkLight) {
   EXPECT_LT(closest, 0.5);
 }
 
+// A walker saved on its way (route, kerb wait, crossing) continues bit for bit after a
+// restore: the snapshot of a replacement ground_sim.
+TEST(GroundWalkerNav, ASavedWalkerOnItsRouteContinuesBitForBit) {
+  const auto town = testing::Town01();
+  const auto& g = town->WalkerNav();
+  const int k = LitCrossing(*town);
+  ASSERT_GE(k, 0);
+  const TownCrosswalk& cw = town->Crosswalks()[static_cast<size_t>(k)];
+  World a(town, 5);
+  const uint32_t light = static_cast<uint32_t>(cw.lights[0] + 1);
+  ASSERT_EQ(a.SetTrafficLight(light, LightColor::kGreen, -1, -1, -1, true), "");
+  ASSERT_EQ(a.AddWalker(9, "walker.pedestrian.0001", {}, Pose::FromYaw(g.Position(AwayFrom(g, cw.nodes[0], cw.centre, 4)) + Vec3(0, 0, 1.0), 0)), "");
+  ASSERT_EQ(a.AddWalkerController(10, 9), "");
+  ASSERT_EQ(a.ControllerStart(10), "");
+  ASSERT_EQ(a.ControllerGoTo(10, g.Position(AwayFrom(g, cw.nodes[1], cw.centre, 4))), "");
+  int on_road = 0;
+  for (const int save_at : {60, 400}) {  // on the way to the kerb; waiting at it (then the light runs)
+    while (a.frame() < static_cast<uint64_t>(save_at)) a.Step(kDt);
+    auto r = World::Restore(town, a.Save());
+    ASSERT_EQ(r->StateHash(), a.StateHash());
+    if (save_at == 400) {
+      for (World* w : {&a, r.get()}) ASSERT_EQ(w->SetTrafficLight(light, std::nullopt, -1, -1, -1, false), "");
+    }
+    for (int i = 0; i < (save_at == 400 ? 900 : 300); ++i) {
+      a.Step(kDt);
+      r->Step(kDt);
+      ASSERT_EQ(a.StateHash(), r->StateHash()) << "diverged " << i << " steps after a restore at " << save_at;
+      on_road += WalkerGraph::OnDrivingLane(town->Map(), a.Walker(9)->pose.position);
+    }
+  }
+  EXPECT_GT(on_road, 10) << "the restored walker never crossed";
+}
+
 // A goal round a block corner: the route follows the sidewalks (never farther than 1 m
 // from a sidewalk edge, never on the road) although the straight line cuts the corner.
 TEST(GroundWalkerNav, GoToLocationGoesRoundABlockCornerAlongTheSidewalks) {

@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <string>
 #include <vector>
 
 #include "lockstep/ground/world.h"
@@ -60,19 +61,53 @@ bool AllRed(const World& w, const TownCrosswalk& cw) {
   return true;
 }
 
+// No node on a driving lane (crossing ends are kerbs, off the road), every crossing end
+// joins the sidewalks, and with the crossings the sidewalks form one network.
+void CheckGraph(const Town& town) {
+  const auto& g = town.WalkerNav();
+  for (size_t n = 0; n < g.NodeCount(); ++n) {
+    ASSERT_FALSE(WalkerGraph::OnDrivingLane(town.Map(), g.Position(static_cast<int>(n)))) << "node " << n;
+  }
+  for (const auto& cw : town.Crosswalks()) {
+    for (int node : cw.nodes) {
+      int sidewalk = 0;
+      for (const auto& e : g.Edges(node)) sidewalk += e.crossing < 0;
+      EXPECT_GT(sidewalk, 0) << "a kerb of the crossing at (" << cw.centre.x() << ", " << cw.centre.y() << ") joins no sidewalk";
+    }
+  }
+  std::vector<bool> seen(g.NodeCount(), false);
+  std::vector<int> todo{0};
+  size_t reached = 0;
+  seen[0] = true;
+  while (!todo.empty()) {
+    const int n = todo.back();
+    todo.pop_back();
+    ++reached;
+    for (const auto& e : g.Edges(n)) {
+      if (!seen[static_cast<size_t>(e.to)]) seen[static_cast<size_t>(e.to)] = true, todo.push_back(e.to);
+    }
+  }
+  std::printf("%s walker graph: %zu nodes, %zu crossings, %zu nodes reached from node 0\n", town.Map().Name().c_str(), g.NodeCount(),
+              town.Crosswalks().size(), reached);
+  EXPECT_GT(reached, g.NodeCount() * 95 / 100);
+}
+
 TEST(GroundWalkerNav, TownOneHasASidewalkGraphWithCrossingsAtEveryJunctionMouth) {
   const auto town = testing::Town01();
-  const auto& g = town->WalkerNav();
-  EXPECT_GT(g.NodeCount(), 1000u);
+  EXPECT_GT(town->WalkerNav().NodeCount(), 1000u);
   int derived = 0, lit = 0;
   for (const auto& cw : town->Crosswalks()) derived += cw.derived, lit += !cw.lights.empty();
-  // 12 T junctions, three mouths each.
+  // 12 T junctions, three mouths each, every one with a light.
   EXPECT_EQ(derived, 36);
   EXPECT_EQ(lit, 36);
-  // No node stands on a driving lane (crossing ends are kerbs, off the road).
-  for (size_t n = 0; n < g.NodeCount(); ++n) {
-    ASSERT_FALSE(WalkerGraph::OnDrivingLane(town->Map(), g.Position(static_cast<int>(n)))) << "node " << n;
-  }
+  CheckGraph(*town);
+}
+
+TEST(GroundWalkerNav, TownTwoHasASidewalkGraphWithCrossings) {
+  const auto town = Town::Load(std::string(LOCKSTEP_CARLA_MAPS_DIR) + "/Town02.xodr", 42);
+  EXPECT_GT(town->WalkerNav().NodeCount(), 500u);
+  EXPECT_GT(town->Crosswalks().size(), 10u);
+  CheckGraph(*town);
 }
 
 // go_to_location to a sidewalk point across the road: the walker walks to the crossing,

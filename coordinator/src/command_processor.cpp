@@ -280,6 +280,7 @@ std::string CommandProcessor::Check(const msg::Command& cmd, bool synchronous) c
       return First(Finite(b.walker_ai().location()) ? std::string() : "go_to_location has a NaN or infinite value",
                    InRange("max_speed", b.walker_ai().max_speed(), 0, 10));
     case CommandKind::CMD_PEDESTRIANS:
+      if (b.pedestrians().seed_only()) return {};
       return InRange("pedestrians cross factor", b.pedestrians().cross_factor(), 0, 1);
   }
   return "unknown command kind";

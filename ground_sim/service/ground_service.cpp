@@ -276,7 +276,11 @@ void GroundService::Apply(const msg::Command& c) {
       return;
     }
     case msg::CommandKind::CMD_PEDESTRIANS:
-      report(0, world_->SetPedestriansCrossFactor(b.pedestrians().cross_factor()));
+      if (b.pedestrians().seed_only()) {
+        world_->SetPedestriansSeed(b.pedestrians().seed());
+      } else {
+        report(0, world_->SetPedestriansCrossFactor(b.pedestrians().cross_factor()));
+      }
       return;
     case msg::CommandKind::CMD_TRAFFIC_MANAGER: {
       const auto& t = b.traffic_manager();

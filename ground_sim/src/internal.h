@@ -167,6 +167,8 @@ struct World::Impl {
   PhysicsSettings settings;
   TmGlobal tm;
   double cross_factor = 0.5;             // share of walkers that cross at a crosswalk they reach
+  bool has_pedestrians_seed = false;     // a client sent set_pedestrians_seed
+  uint64_t pedestrians_seed = 0;
   Rng tm_rng;                            // TM-wide draws (respawn points)
 
   dWorldID world = nullptr;
@@ -238,6 +240,7 @@ struct World::Impl {
   void StepWalkers(double dt);
   void StepControllers(double dt);
   bool MayCross(const TownCrosswalk& cw) const;
+  uint64_t ControllerSeed(uint32_t id) const;
 };
 
 Pose BodyPose(dBodyID b);

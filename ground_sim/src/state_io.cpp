@@ -12,8 +12,8 @@ namespace lockstep::ground {
 namespace {
 
 constexpr uint32_t kMagic = 0x47524E44;  // "GRND"
-constexpr uint32_t kVersion = 4;  // 2: every field written explicitly (no struct padding); 3: stop signs, contacts of the last step, crosswalks;
-                                   // 4: benchmark onsets, distance, off-road fraction, props
+constexpr uint32_t kVersion = 5;  // 2: every field written explicitly (no struct padding); 3: stop signs, contacts of the last step, crosswalks;
+                                   // 4: benchmark onsets, distance, off-road fraction, props; 5: pedestrians seed
 
 class Writer {
  public:
@@ -333,7 +333,7 @@ std::vector<uint8_t> World::Save() const {
     w.Pod(c.rng.s);
     w.Pod<int32_t>(c.crossing), w.Pod<int32_t>(c.cross_end), w.Pod(c.cross_wait), w.Pod<int32_t>(c.last_crosswalk);
   }
-  w.Pod(I.cross_factor);
+  w.Pod(I.cross_factor), w.Pod(I.has_pedestrians_seed), w.Pod(I.pedestrians_seed);
   w.Pod<uint32_t>(static_cast<uint32_t>(I.last_contacts.size()));
   for (const auto& [a, b] : I.last_contacts) w.Pod(a), w.Pod(b);
   w.Pod<uint32_t>(static_cast<uint32_t>(I.props.size()));
@@ -418,7 +418,7 @@ std::unique_ptr<World> World::Restore(std::shared_ptr<const Town> town, const st
       throw std::runtime_error("ground state: bad crosswalk of a walker controller");
     I.controllers.emplace(c.id, std::move(c));
   }
-  r.Get(&I.cross_factor);
+  r.Get(&I.cross_factor), r.Get(&I.has_pedestrians_seed), r.Get(&I.pedestrians_seed);
   const auto ncontacts = r.Pod<uint32_t>();
   for (uint32_t k = 0; k < ncontacts; ++k) {
     const auto a = r.Pod<uint32_t>();

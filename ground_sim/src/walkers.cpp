@@ -217,6 +217,16 @@ std::string World::SetPedestriansCrossFactor(double factor) {
   return {};
 }
 
+uint64_t World::Impl::ControllerSeed(uint32_t id) const {
+  return has_pedestrians_seed ? MixSeed(MixSeed(seed, pedestrians_seed ^ 0x9ED5EEDull), id) : MixSeed(seed, id);
+}
+
+void World::SetPedestriansSeed(uint64_t s) {
+  impl_->has_pedestrians_seed = true;
+  impl_->pedestrians_seed = s;
+  for (auto& [id, c] : impl_->controllers) c.rng.s = impl_->ControllerSeed(id);
+}
+
 std::string World::ControllerStart(uint32_t id) {
   auto it = impl_->controllers.find(id);
   if (it == impl_->controllers.end()) return "actor " + std::to_string(id) + " is not a controller.ai.walker";

@@ -507,7 +507,7 @@ std::string World::AddWalkerController(uint32_t id, uint32_t walker) {
   c.id = id;
   c.walker = walker;
   c.max_speed = w->attributes.walker_speed > 0 ? w->attributes.walker_speed : w->spec->walk_speed;
-  c.rng.s = MixSeed(impl_->seed, id);
+  c.rng.s = impl_->ControllerSeed(id);
   w->controller = id;
   impl_->controllers.emplace(id, std::move(c));
   return {};

@@ -220,7 +220,12 @@ msg::CommandBody CommandFromDict(const py::dict& d) {
     b.traffic_light(x);
   } else if (type == "pedestrians") {
     msg::PedestrianSettings x;
-    x.cross_factor(f.Need<double>("cross_factor"));
+    if (f.Has("seed")) {
+      x.seed_only(true);
+      x.seed(f.Need<uint64_t>("seed"));
+    } else {
+      x.cross_factor(f.Need<double>("cross_factor"));
+    }
     b.pedestrians(x);
   } else if (type == "traffic_manager") {
     msg::TrafficManagerCommand x;

@@ -489,9 +489,12 @@ class World:
         self._client.submit({'type': 'pedestrians', 'cross_factor': float(percentage)})
 
     def set_pedestrians_seed(self, seed):
-        """Seeds get_random_location_from_navigation, as CARLA seeds its navigation. The
-        walker AI controllers in ground_sim draw from the run seed instead."""
+        """Seeds CARLA's navigation randomness: get_random_location_from_navigation here,
+        and the walker AI controllers' choices in ground_sim (mixed with the run seed)."""
         self._pedestrians_random = random.Random(int(seed))
+        st = self._client.run_status()
+        if st is not None and any(k == 'ground_sim' and alive for _, k, alive, _ in st['members']):
+            self._client.submit({'type': 'pedestrians', 'seed': int(seed) & 0xFFFFFFFFFFFFFFFF})
 
     def get_random_location_from_navigation(self):
         points = self._client.map().pedestrian_spawn_points(20.0)

@@ -177,6 +177,10 @@ class World {
   // the road at a crosswalk they reach (when its lights, if any, are red for vehicles;
   // else when no vehicle approaches within 25 m). Default 0.5.
   std::string SetPedestriansCrossFactor(double factor);
+  // CARLA's world.set_pedestrians_seed: every walker AI controller's generator (those that
+  // exist and those spawned later) restarts from this seed mixed with the run seed and the
+  // controller id. Without it they draw from the run seed and their id.
+  void SetPedestriansSeed(uint64_t seed);
 
   // Bodies of other simulators for this step (replaces the previous set).
   void SetExternalBodies(std::vector<ExternalBody> bodies);

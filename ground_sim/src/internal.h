@@ -118,12 +118,16 @@ struct ControllerActor {
   double max_speed = 1.4;                // m/s
   bool has_goal = false;
   Vec3 goal = Vec3::Zero();
-  std::deque<map::Waypoint> path;        // sidewalk points towards the goal
+  bool planned = false;                  // the route to the goal is computed
+  Vec3 goal_point = Vec3::Zero();        // where that route ends: the goal, or its nearest graph point
+  std::deque<std::pair<int, int>> route; // graph nodes ahead, each with the crossing of the edge reaching it (-1: none)
   Rng rng;
-  int crossing = -1;                     // crosswalk (Town::Crosswalks index) it is crossing
+  int at_node = -1;                      // last graph node reached
+  int came_from = -1;                    // the node before it
+  int drawn_node = -1;                   // node where the cross draw was made (once per arrival)
+  int crossing = -1;                     // crossing (Town::Crosswalks index) it waits at or walks over
   int cross_end = 0;                     // the end it walks to
-  bool cross_wait = false;               // at the kerb, waiting for its turn
-  int last_crosswalk = -1;               // crosswalk whose end it stands at (drawn once)
+  bool cross_wait = false;               // at the kerb, waiting for the walk light and a free road
 };
 
 struct ExternalActor {
@@ -238,8 +242,11 @@ struct World::Impl {
 
   // walkers.cpp
   void StepWalkers(double dt);
+  // walker_ai.cpp
   void StepControllers(double dt);
   bool MayCross(const TownCrosswalk& cw) const;
+  void PlanRoute(ControllerActor& c, const Vec3& pos);
+  bool ExtendWander(ControllerActor& c, const Vec3& pos);
   uint64_t ControllerSeed(uint32_t id) const;
 };
 

@@ -13,7 +13,7 @@ namespace {
 
 constexpr uint32_t kMagic = 0x47524E44;  // "GRND"
 constexpr uint32_t kVersion = 5;  // 2: every field written explicitly (no struct padding); 3: stop signs, contacts of the last step, crosswalks;
-                                   // 4: benchmark onsets, distance, off-road fraction, props; 5: pedestrians seed
+                                   // 4: benchmark onsets, distance, off-road fraction, props; 5: pedestrians seed, walker graph routes
 
 class Writer {
  public:
@@ -329,9 +329,12 @@ std::vector<uint8_t> World::Save() const {
   w.Pod<uint32_t>(static_cast<uint32_t>(I.controllers.size()));
   for (const auto& [id, c] : I.controllers) {
     w.Pod(c.id), w.Pod(c.walker), w.Pod(c.running), w.Pod(c.max_speed), w.Pod(c.has_goal), w.V(c.goal);
-    PutWaypoints(w, c.path);
+    w.Pod(c.planned), w.V(c.goal_point);
+    w.Pod<uint32_t>(static_cast<uint32_t>(c.route.size()));
+    for (const auto& [node, crossing] : c.route) w.Pod<int32_t>(node), w.Pod<int32_t>(crossing);
     w.Pod(c.rng.s);
-    w.Pod<int32_t>(c.crossing), w.Pod<int32_t>(c.cross_end), w.Pod(c.cross_wait), w.Pod<int32_t>(c.last_crosswalk);
+    w.Pod<int32_t>(c.at_node), w.Pod<int32_t>(c.came_from), w.Pod<int32_t>(c.drawn_node);
+    w.Pod<int32_t>(c.crossing), w.Pod<int32_t>(c.cross_end), w.Pod(c.cross_wait);
   }
   w.Pod(I.cross_factor), w.Pod(I.has_pedestrians_seed), w.Pod(I.pedestrians_seed);
   w.Pod<uint32_t>(static_cast<uint32_t>(I.last_contacts.size()));
@@ -408,14 +411,29 @@ std::unique_ptr<World> World::Restore(std::shared_ptr<const Town> town, const st
     ControllerActor c;
     r.Get(&c.id), r.Get(&c.walker), r.Get(&c.running), r.Get(&c.max_speed), r.Get(&c.has_goal);
     c.goal = r.V();
-    c.path = GetWaypoints(r, m);
+    r.Get(&c.planned);
+    c.goal_point = r.V();
+    const int nodes = static_cast<int>(town->WalkerNav().NodeCount());
+    const int crossings = static_cast<int>(town->Crosswalks().size());
+    auto node_ok = [nodes](int n) { return n >= -1 && n < nodes; };
+    auto crossing_ok = [crossings](int x) { return x >= -1 && x < crossings; };
+    const auto nroute = r.Pod<uint32_t>();
+    for (uint32_t q = 0; q < nroute; ++q) {
+      const int node = r.Pod<int32_t>();
+      const int crossing = r.Pod<int32_t>();
+      if (node < 0 || !node_ok(node) || !crossing_ok(crossing)) throw std::runtime_error("ground state: bad route of a walker controller");
+      c.route.emplace_back(node, crossing);
+    }
     r.Get(&c.rng.s);
+    c.at_node = r.Pod<int32_t>();
+    c.came_from = r.Pod<int32_t>();
+    c.drawn_node = r.Pod<int32_t>();
     c.crossing = r.Pod<int32_t>();
     c.cross_end = r.Pod<int32_t>();
     r.Get(&c.cross_wait);
-    c.last_crosswalk = r.Pod<int32_t>();
-    if (c.crossing >= static_cast<int>(town->Crosswalks().size()) || c.cross_end < 0 || c.cross_end > 1)
-      throw std::runtime_error("ground state: bad crosswalk of a walker controller");
+    if (!node_ok(c.at_node) || !node_ok(c.came_from) || !node_ok(c.drawn_node) || !crossing_ok(c.crossing) || c.cross_end < 0 ||
+        c.cross_end > 1)
+      throw std::runtime_error("ground state: bad graph position of a walker controller");
     I.controllers.emplace(c.id, std::move(c));
   }
   r.Get(&I.cross_factor), r.Get(&I.has_pedestrians_seed), r.Get(&I.pedestrians_seed);

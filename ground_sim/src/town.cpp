@@ -32,6 +32,7 @@ Town::Town(map::Map map, std::vector<map::Mesh> meshes) : map_(std::move(map)), 
   for (size_t i = 0; i < signs_.size(); ++i) {
     for (const auto& wp : signs_[i].stop_waypoints) lane_sign_.emplace(std::make_tuple(wp.road, wp.section, wp.lane), static_cast<int>(i));
   }
+  std::vector<TownCrosswalk> crosswalks;
   for (const auto& poly : map_.Crosswalks()) {
     if (poly.size() < 3) continue;
     TownCrosswalk cw;
@@ -58,8 +59,18 @@ Town::Town(map::Map map, std::vector<map::Mesh> meshes) : map_(std::move(map)), 
         }
       }
     }
-    crosswalks_.push_back(std::move(cw));
+    crosswalks.push_back(std::move(cw));
   }
+  // Lights of a lane whose stop line is near a crossing (not the road's other end).
+  auto light_near = [this](int road, int section, int lane, const Eigen::Vector3d& at) {
+    const int light = LightOfLane(road, section, lane);
+    if (light < 0) return -1;
+    for (const auto& stop : lights_[static_cast<size_t>(light)].info.stop_waypoints) {
+      if ((stop.transform.location - at).head<2>().norm() < 20.0) return light;
+    }
+    return -1;
+  };
+  walker_graph_ = WalkerGraph(map_, std::move(crosswalks), light_near);
   spawn_points_ = map_.SpawnPoints();
   walker_spawn_points_ = map_.PedestrianSpawnPoints();
   uint64_t h = 1469598103934665603ull;

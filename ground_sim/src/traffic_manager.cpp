@@ -13,6 +13,7 @@ namespace {
 constexpr double kSpacing = 2.0;           // m between path points
 constexpr double kComfortDecel = 3.0;      // m/s^2 for planned stops
 constexpr double kYellowDecel = 4.0;       // m/s^2: stop on yellow if this suffices
+constexpr double kHardDecel = 6.0;         // m/s^2: a car that can stop with this before the line does on red
 constexpr double kMaxLateralAccel = 4.0;   // m/s^2 in curves (kinematic cars)
 constexpr double kPhysicsLateralAccel = 1.5;  // m/s^2 in curves for cars on physics (they must hold their lane)
 constexpr double kStopSignTime = 2.0;      // s of full stop at a stop sign (docs/ground.md)
@@ -278,7 +279,21 @@ void World::Impl::StepTrafficManager(double dt) {
   }
   for (const auto& [wid, w] : walkers) {
     const Pose wp = BodyPose(w->body);
-    obstacles.push_back(Obstacle{wid, wp.position, w->velocity, Eigen::Vector2d(1, 0), w->spec->radius, w->spec->radius, true});
+    Obstacle o{wid, wp.position, w->velocity, Eigen::Vector2d(1, 0), w->spec->radius, w->spec->radius, true};
+    // A walker crossing the road (a crossing of the walker graph) holds the rest of the
+    // crossing, up to its far kerb: cars stop before it, not only when it is in their lane.
+    if (auto c = controllers.find(w->controller); w->controller && c != controllers.end() && c->second.crossing >= 0 &&
+                                                  !c->second.cross_wait) {
+      const Vec3& far = town->Crosswalks()[static_cast<size_t>(c->second.crossing)].ends[c->second.cross_end];
+      const Eigen::Vector2d rest = (far - wp.position).head<2>();
+      const double len = rest.norm();
+      if (len > 0.1) {
+        o.forward = rest / len;
+        o.half_x += len / 2;
+        o.position.head<2>() += rest / 2;
+      }
+    }
+    obstacles.push_back(o);
   }
   for (auto& [id, v] : vehicles) {
     if (v->autopilot) TmVehicle(v.get(), dt, &junction_users, obstacles);
@@ -369,6 +384,10 @@ void World::Impl::TmVehicle(VehicleActor* v, double dt, std::map<int, std::vecto
         if (!s.ignore_light) {
           if (c == LightColor::kRed) must_stop = front > -0.5;
           if (c == LightColor::kYellow) must_stop = front > speed * speed / (2 * kYellowDecel);
+          // Committed on green but still able to stop before the line (held by a walker
+          // on the crossing, slowed for the turn): it stops on yellow and red.
+          if (must_stop && s.committed_junction == junction && front > 0 && front > speed * speed / (2 * kHardDecel))
+            s.committed_junction = -1;
         }
         // Red-light infraction: the front crossed the line during this step on red.
         if (s.entry_key == key && s.front_to_line > 0 && front <= 0 && c == LightColor::kRed) ++v->infractions.red_lights;

@@ -359,11 +359,7 @@ s::WorldFrame SensorsService::Gather(const msg::Tick& tick, uint64_t frame, s::F
         if (c.id == p.parent) parent = &c;
       }
       if (!parent) continue;  // the parent is not in this frame
-      s::Pose mount = parent->pose;
-      if (parent->kind == s::ActorKind::kVehicle || parent->kind == s::ActorKind::kWalker) {
-        mount.position = parent->pose.Apply(s::Vec3(0, 0, -parent->half_extents.z()));
-      }
-      a.pose = mount.Compose(p.transform);
+      a.pose = s::MountPose(*parent).Compose(p.transform);
       a.velocity = parent->velocity;
     }
     f.actors.push_back(std::move(a));

@@ -137,19 +137,20 @@ StepOutput SensorWorld::Step(const WorldFrame& frame, double dt, const FrameEven
     if (sp.parent && !parent) continue;  // not in this frame (yet, or any more)
     if (s->type == SensorType::kCollision) {
       for (const auto& e : events.collisions) {
-        if (parent && e.actor == sp.parent) out.collision.push_back({id, sp.parent, parent->pose, CollisionSample{e}});
+        if (parent && e.actor == sp.parent) out.collision.push_back({id, sp.parent, MountPose(*parent).Compose(sp.transform), CollisionSample{e}});
       }
       continue;
     }
     if (s->type == SensorType::kLaneInvasion) {
       for (const auto& e : events.lane_invasions) {
-        if (parent && e.actor == sp.parent) out.lane_invasion.push_back({id, sp.parent, parent->pose, LaneInvasionSample{e.crossed}});
+        if (parent && e.actor == sp.parent) out.lane_invasion.push_back({id, sp.parent, MountPose(*parent).Compose(sp.transform), LaneInvasionSample{e.crossed}});
       }
       continue;
     }
     double elapsed = 0;
     if (!s->Due(frame.sim_time, dt, &elapsed)) continue;
-    const Pose pose = parent ? parent->pose.Compose(sp.transform) : sp.transform;
+    // Attached: relative to the parent's mount (vehicles and walkers: the bottom of the box).
+    const Pose pose = parent ? MountPose(*parent).Compose(sp.transform) : sp.transform;
     const Vec3 omega = parent ? parent->angular_velocity : Vec3::Zero();
     const Vec3 velocity = parent ? Vec3(parent->velocity + omega.cross(pose.position - parent->pose.position)) : Vec3::Zero();
     std::visit(

@@ -14,6 +14,11 @@ Pose MakePose(double x, double y, double z, double yaw, double pitch, double rol
   return Pose{Vec3(x, y, z), q.normalized()};
 }
 
+Pose MountPose(const Actor& a) {
+  if (a.kind != ActorKind::kVehicle && a.kind != ActorKind::kWalker) return a.pose;
+  return Pose{a.pose.Apply(Vec3(0, 0, -a.half_extents.z())), a.pose.orientation};
+}
+
 uint8_t ActorTag(const Actor& a) {
   if (a.tag) return a.tag;
   auto has = [&](const char* s) { return a.blueprint.find(s) != std::string::npos; };

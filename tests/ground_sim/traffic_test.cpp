@@ -235,9 +235,9 @@ TEST(GroundTraffic, WalkersWithAnAiControllerWalkTheSidewalks) {
     EXPECT_GT((v.pose.position - start[v.id]).head<2>().norm(), 5.0) << "walker " << v.id;
   }
   EXPECT_GT(on_sidewalk, samples * 9 / 10);
-  // go_to_location reaches the location (then, as in CARLA, the walker walks on), and stop.
+  // go_to_location reaches a sidewalk location (then, as in CARLA, the walker walks on), and stop.
   const uint32_t c = rep.controllers.front(), walker = rep.walkers.front();
-  const Vec3 goal = w.Walker(walker)->pose.position + Vec3(3, 0, 0);
+  const Vec3 goal = w.town().WalkerNav().NearestPoint(w.Walker(walker)->pose.position + Vec3(3, 0, 0), nullptr);
   ASSERT_EQ(w.ControllerGoTo(c, goal), "");
   double closest = 1e9;
   for (int i = 0; i < 100; ++i) {
@@ -260,11 +260,20 @@ TEST(GroundTraffic, Town01HundredVehiclesFiftyWalkersTenMinutes) {
   ASSERT_EQ(rep.vehicles.size(), 100u);
   ASSERT_EQ(rep.walkers.size(), 50u);
   std::set<std::pair<uint32_t, uint32_t>> vehicle_pairs;
-  int walker_hits = 0;
+  int walker_hits = 0, crossings = 0;
   double speed_sum = 0;
   long samples = 0;
+  std::set<uint32_t> on_road;  // walkers on a driving lane at the last sample
   for (int i = 0; i < 12000; ++i) {
     w.Step(kDt);
+    if (i % 10 == 0) {  // walkers stepping onto the road: crossings (the graph's only way over)
+      for (const auto& v : w.Walkers()) {
+        const bool now = WalkerGraph::OnDrivingLane(w.town().Map(), v.pose.position);
+        if (now && !on_road.count(v.id)) ++crossings;
+        if (now) on_road.insert(v.id);
+        else on_road.erase(v.id);
+      }
+    }
     for (const auto& c : w.Collisions()) {
       if (!w.IsVehicle(c.actor)) continue;
       if (c.other_kind == ObjectKind::kVehicle) vehicle_pairs.insert({std::min(c.actor, c.other_actor), std::max(c.actor, c.other_actor)});
@@ -281,12 +290,13 @@ TEST(GroundTraffic, Town01HundredVehiclesFiftyWalkersTenMinutes) {
   for (const auto& v : w.Vehicles()) red += v.infractions.red_lights;
   const double mean_kmh = speed_sum / static_cast<double>(samples) * 3.6;
   RecordProperty("mean_speed_kmh", std::to_string(mean_kmh));
-  std::printf("Town01 10 min: mean speed %.2f km/h, vehicle pairs in contact %zu, walker hits %d, red lights %d\n", mean_kmh,
-              vehicle_pairs.size(), walker_hits, red);
+  std::printf("Town01 10 min: mean speed %.2f km/h, vehicle pairs in contact %zu, walker hits %d, red lights %d, walker crossings %d\n",
+              mean_kmh, vehicle_pairs.size(), walker_hits, red, crossings);
   EXPECT_TRUE(vehicle_pairs.empty());
   EXPECT_EQ(walker_hits, 0);
   EXPECT_EQ(red, 0);
   EXPECT_GT(mean_kmh, 15.0);
+  EXPECT_GT(crossings, 0) << "no walker crossed a road";
 }
 
 }  // namespace

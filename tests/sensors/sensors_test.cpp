@@ -238,6 +238,30 @@ TEST(EventSensors, DeliverTheirActorsEventsOnly) {
   EXPECT_EQ(w.Step(Frame(2, kDt, {car}), kDt).size(), 0u) << "no events, no samples";
 }
 
+// Like the render service's cameras (and CARLA's vehicle origin): a sensor attached to a
+// vehicle or walker is placed relative to the bottom centre of its box, on a drone
+// relative to its centre.
+TEST(Mount, AttachedSensorsSitOnTheBottomOfVehiclesAndWalkersAndTheCentreOfDrones) {
+  SensorWorld w(1);
+  ASSERT_EQ(w.Add(Spawn(10, "sensor.other.imu", {}, 5, MakePose(1.5, 0, 2.4))), "");
+  ASSERT_EQ(w.Add(Spawn(11, "sensor.other.gnss", {}, 6, MakePose(0, 0, 1.7))), "");
+  ASSERT_EQ(w.Add(Spawn(12, "sensor.other.imu", {}, 7, MakePose(0, 0, -0.1))), "");
+  ASSERT_EQ(w.Add(Spawn(13, "sensor.other.collision", {}, 5, MakePose(0, 0, 0))), "");
+  const Actor car = MakeActor(5, ActorKind::kVehicle, "vehicle.lockstep.sedan", MakePose(10, 0, 0.8, M_PI / 2), Vec3(2.3, 1, 0.75));
+  const Actor walker = MakeActor(6, ActorKind::kWalker, "walker.pedestrian.0001", MakePose(0, 3, 0.9), Vec3(0.25, 0.25, 0.9));
+  const Actor drone = MakeActor(7, ActorKind::kDrone, "drone", MakePose(0, 0, 5), Vec3(0.3, 0.3, 0.1));
+  FrameEvents ev;
+  ev.collisions.push_back({5, 9, HitKind::kVehicle, 14, Vec3(100, 0, 0), Vec3(1, 0, 0)});
+  const auto out = w.Step(Frame(1, kDt, {car, walker, drone}), kDt, ev);
+  ASSERT_EQ(out.imu.size(), 2u);
+  EXPECT_NEAR((out.imu[0].pose.position - Vec3(10, 1.5, 0.05 + 2.4)).norm(), 0, 1e-12) << "the car's box bottom is at 0.05";
+  EXPECT_NEAR((out.imu[1].pose.position - Vec3(0, 0, 4.9)).norm(), 0, 1e-12);
+  ASSERT_EQ(out.gnss.size(), 1u);
+  EXPECT_NEAR((out.gnss[0].pose.position - Vec3(0, 3, 1.7)).norm(), 0, 1e-12);
+  ASSERT_EQ(out.collision.size(), 1u);
+  EXPECT_NEAR((out.collision[0].pose.position - Vec3(10, 0, 0.05)).norm(), 0, 1e-12);
+}
+
 TEST(SensorTick, PointOneSecondAtDtPointZeroFiveSamplesEverySecondFrame) {
   for (const char* bp : {"sensor.other.imu", "sensor.lidar.ray_cast", "sensor.other.gnss"}) {
     SensorWorld w(1);

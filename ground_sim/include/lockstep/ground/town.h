@@ -11,21 +11,13 @@
 #include "lockstep/map/map.h"
 #include "lockstep/map/mesh.h"
 #include "lockstep/map/scene.h"
+#include "lockstep/ground/walker_graph.h"
 
 namespace lockstep::ground {
 
 struct TownLight {
   map::TrafficLightInfo info;
   int group = 0;                      // lights of one junction cycle together
-};
-
-// A crosswalk of the map (OpenDRIVE objects of type crosswalk): where it meets the
-// sidewalks on both sides of the road, and the traffic lights of the lanes it crosses
-// (walkers may cross when all of them are red for the vehicles).
-struct TownCrosswalk {
-  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
-  Eigen::Vector3d ends[2] = {Eigen::Vector3d::Zero(), Eigen::Vector3d::Zero()};
-  std::vector<int> lights;
 };
 
 class Town {
@@ -51,7 +43,11 @@ class Town {
   // travel direction, NaN if none. Vehicles keep the last sign they passed (CARLA's
   // speed-limit trigger boxes set the vehicle's limit; 30 km/h until the first).
   double SignSpeedLimit(const map::Waypoint& wp) const;
-  const std::vector<TownCrosswalk>& Crosswalks() const { return crosswalks_; }
+  // Every crossing walkers use: the map's crosswalk objects, then those derived at
+  // junction mouths (WalkerGraph::Crossings()).
+  const std::vector<TownCrosswalk>& Crosswalks() const { return walker_graph_.Crossings(); }
+  // The pedestrian navigation graph (sidewalks and crossings).
+  const WalkerGraph& WalkerNav() const { return walker_graph_; }
   const std::vector<map::Transform>& SpawnPoints() const { return spawn_points_; }
   const std::vector<map::Transform>& WalkerSpawnPoints() const { return walker_spawn_points_; }
   uint64_t Hash() const { return hash_; }
@@ -63,7 +59,7 @@ class Town {
   int group_count_ = 0;
   std::map<std::tuple<int, int, int>, int> lane_light_;
   std::vector<map::TrafficLightInfo> signs_;
-  std::vector<TownCrosswalk> crosswalks_;
+  WalkerGraph walker_graph_;
   std::map<std::tuple<int, int, int>, int> lane_sign_;
   std::vector<map::Transform> spawn_points_;
   std::vector<map::Transform> walker_spawn_points_;

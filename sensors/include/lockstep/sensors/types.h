@@ -44,6 +44,10 @@ struct Actor {
 // CARLA semantic tag of an actor (Car, Truck, Bus, Motorcycle, Bicycle, Pedestrian; drones
 // have no CARLA class: Dynamic).
 uint8_t ActorTag(const Actor& a);
+// The frame an attached sensor's or prop's transform is relative to, as the render service
+// draws cameras: vehicles and walkers, the bottom centre of their box (CARLA's vehicle
+// origin); drones and others, their pose.
+Pose MountPose(const Actor& a);
 // CARLA's semantic tag of a class name ("Static", "Vehicles" is not one: "Car"), case
 // insensitive; -1 if unknown.
 int TagFromClassName(const std::string& name);

@@ -225,6 +225,9 @@ def main():
 
         for name, s in sensors.items():
             s.listen(listener(name))
+        # Every tick from here on (the takeoff's included) delivers one frame per camera,
+        # LiDAR, IMU and GNSS; the event sensors only when something happens.
+        first_listened = world.get_snapshot().frame + 1
 
         air = airsim.MultirotorClient()
         air.enableApiControl(True, 'follower')
@@ -296,7 +299,10 @@ def main():
             'ticks_per_second': round(args.ticks / wall, 2),
             'real_time_factor': round(args.ticks * 0.05 / wall, 3),
             'frames_per_sensor': {n: len(f) for n, f in frames.items()},
+            'frames_since_listen': frame - first_listened + 1,
             'sensor_frames_in_order_once': {n: f == sorted(set(f)) for n, f in frames.items()},
+            'every_frame_once': {n: f == list(range(first_listened, frame + 1)) for n, f in frames.items()
+                                 if n not in infractions},
             'ground_air_frame_alignment': '%d/%d ticks' % (aligned, args.ticks),
             'infractions': infractions,
             'cars': (1 if ego else 0) + len(npcs),
@@ -314,7 +320,9 @@ def main():
                                                                                 summary['real_time_factor']),
                  '  services: %s' % ', '.join(members),
                  '  actors: %d cars, %d walkers, 1 drone' % (summary['cars'], summary['walkers']),
-                 '  frames per sensor: %s' % ', '.join('%s %d' % kv for kv in summary['frames_per_sensor'].items()),
+                 '  frames per sensor (%d frames since listen(), the takeoff included; every one once and in order: %s): %s' % (
+                     summary['frames_since_listen'], 'yes' if all(summary['every_frame_once'].values()) else 'NO',
+                     ', '.join('%s %d' % kv for kv in summary['frames_per_sensor'].items())),
                  '  ground/air frame alignment: %s' % summary['ground_air_frame_alignment'],
                  '  infractions: %d collision event(s), %d lane invasion(s)' % (infractions['collision'],
                                                                                  infractions['lane_invasion']),

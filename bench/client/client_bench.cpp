@@ -1,41 +1,51 @@
-// bench_client: what the client adds on top of the tick barrier, in one run.
-// A coordinator (this process) in synchronous mode over the generated town, one no-op
-// service (a process) as the empty world, and a camera service (this process) that
-// publishes a 1280x720 BGRA image per tick for each camera it owns, stamped with its
-// publication time. Then:
-//   tick_roundtrip_us_cpp     median of Client::tick() over DDS (C++)
-//   barrier_median_us         the coordinator's median tick-to-last-ack time meanwhile
-//   tick_roundtrip_us_python  median of lockstep.Client.tick() from Python (client_bench.py)
-//   barrier_median_us_during_python  the barrier's median over those same Python ticks
-//   python_to_barrier         tick_roundtrip_us_python / barrier_median_us_during_python
-//   get_waypoint_us_python    carla Map.get_waypoint from Python, mean per call
-//   image_720p_to_numpy_ms    median from the camera's write to a numpy view in a Python callback
-// Prints JSON lines; the last is the summary.
+// bench_client: what a client's tick costs on top of the bare barrier, in one run.
+// The bare barrier is the coordinator's barrier with one no-op service (a process): the
+// time from publishing a tick to its last ack, as the coordinator measures it. Here the
+// coordinator (this process) runs in synchronous mode over the generated town with that
+// one required no-op service, and every tick is one a client asked for, so each client
+// tick has its own barrier sample.
+//   1. A C++ client in this process (the coordinator's) ticks: the DDS messages between
+//      them never leave the process (tick_roundtrip_us_cpp_in_process).
+//   2. A C++ client and a Python client (lockstep.carla world.tick()), each in its own
+//      process as a user's would be, tick in interleaved blocks of 100, alternating
+//      which goes first, so both see the same load. For each, the median round trip and
+//      the barrier median over its own ticks; the ratios divide the two.
+//   3. The Python process measures carla Map.get_waypoint, then, with a camera service
+//      (this process, not required, joined only now) publishing a 1280x720 BGRA image
+//      per tick, the delay from the camera's write to a numpy view in a listen callback
+//      (the coordinator logs that the camera diverged: a newcomer without the run's past).
+// Prints JSON lines; the last is the summary, whose python_to_barrier is exactly
+// tick_roundtrip_us_python / barrier_median_us as printed.
+// `bench_client --child DOMAIN` is the C++ client process of step 2.
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <map>
-#include <set>
+#include <fstream>
+#include <memory>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "bench_camera.h"
+#include "child_process.h"
 #include "lockstep/client/client.h"
 #include "lockstep/coordinator/coordinator.h"
-#include "lockstep/runtime/blueprint_builder.h"
 #include "lockstep/runtime/domain_lock.h"
 #include "lockstep/runtime/log.h"
-#include "lockstep/runtime/service.h"
 
 namespace {
 
 using Clock = std::chrono::steady_clock;
+using lockstep::bench::ChildProcess;
+
+constexpr int kBlock = 100;
 
 double Median(std::vector<double> v) {
   if (v.empty()) return 0;
@@ -43,15 +53,27 @@ double Median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
+double Round1(double v) { return std::round(v * 10) / 10; }
+
+double LoadAverage() {
+  std::ifstream f("/proc/loadavg");
+  double l = -1;
+  f >> l;
+  return l;
+}
+
 std::string BinDir() { return std::filesystem::canonical("/proc/self/exe").parent_path().string(); }
 
-pid_t Spawn(const std::vector<std::string>& argv, const std::string& out_file = "") {
-  pid_t pid = fork();
+lockstep::client::ClientOptions Options(int domain) {
+  lockstep::client::ClientOptions o;
+  o.domain = domain;
+  o.timeout_s = 30;
+  return o;
+}
+
+pid_t Spawn(const std::vector<std::string>& argv) {
+  const pid_t pid = fork();
   if (pid == 0) {
-    if (!out_file.empty()) {
-      FILE* f = std::fopen(out_file.c_str(), "w");
-      if (f) dup2(fileno(f), 1);
-    }
     std::vector<char*> args;
     for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
     args.push_back(nullptr);
@@ -61,56 +83,62 @@ pid_t Spawn(const std::vector<std::string>& argv, const std::string& out_file = 
   return pid;
 }
 
-// A camera service: declares sensor.camera.rgb and publishes one 720p frame per tick per
-// camera, with the steady-clock publication time (s) in sensor_pose.position.x (bench only).
-class BenchCamera final : public lockstep::ServiceCore {
- public:
-  explicit BenchCamera(lockstep::Bus& bus) : bus_(bus) {}
-  std::vector<lockstep::msg::BlueprintDeclaration> Blueprints() const override {
-    namespace bp = lockstep::blueprint;
-    return {bp::Make("sensor.camera.rgb", lockstep::msg::ActorKind::ACTOR_SENSOR,
-                     {bp::String("role_name", ""), bp::Int("image_size_x", 1280, 1, 3840), bp::Int("image_size_y", 720, 1, 2160)})};
-  }
-  void BeginRun(const lockstep::msg::WorldInfo&) override { images_.clear(); }
-  bool StepNeverWaits() const override { return true; }
-  void Step(const lockstep::msg::Tick& tick) override {
-    for (const auto& c : tick.commands()) {
-      if (c.body()._d() == lockstep::msg::CommandKind::CMD_SPAWN_ACTOR) {
-        const uint32_t id = c.body().spawn_actor().actor();
-        const std::string topic = lockstep::topics::ImageTopicName(id);  // one topic per camera
-        images_.emplace(id, lockstep::Writer<lockstep::msg::Image>(
-                                bus_, lockstep::Topic<lockstep::msg::Image>{topic.c_str(), lockstep::QosKind::kImage}));
-      }
+// The C++ client process: "tick N" -> N round trips (us) on one line; EOF ends it. The
+// answers go to the original stdout; logging (stdout) goes to stderr instead.
+int RunChild(int domain) {
+  FILE* answers = fdopen(dup(1), "w");
+  dup2(2, 1);
+  lockstep::client::Client client(Options(domain));
+  client.wait_ready(30);
+  std::fprintf(answers, "ready\n");
+  std::fflush(answers);
+  char* line = nullptr;
+  size_t cap = 0;
+  while (getline(&line, &cap, stdin) > 0) {
+    if (std::strncmp(line, "tick ", 5) != 0) break;
+    const int n = std::atoi(line + 5);
+    std::string out;
+    for (int i = 0; i < n; ++i) {
+      const auto t0 = Clock::now();
+      client.tick();
+      char b[32];
+      std::snprintf(b, sizeof(b), "%s%.1f", i ? " " : "", std::chrono::duration<double, std::micro>(Clock::now() - t0).count());
+      out += b;
     }
-    for (auto& [id, writer] : images_) {
-      lockstep::msg::Image im;
-      im.sensor(id);
-      im.stamp().run(tick.run());
-      im.stamp().frame(tick.frame());
-      im.stamp().sim_time(tick.sim_time());
-      im.width(1280);
-      im.height(720);
-      im.step(1280 * 4);
-      im.encoding(static_cast<uint32_t>(lockstep::msg::ImageEncoding::IMAGE_BGRA8));
-      im.data().assign(1280 * 720 * 4, static_cast<uint8_t>(tick.frame()));
-      im.sensor_pose().position().x(std::chrono::duration<double>(Clock::now().time_since_epoch()).count());
-      writer.Write(im);
-    }
+    std::fprintf(answers, "%s\n", out.c_str());
+    std::fflush(answers);
   }
+  std::free(line);
+  std::fclose(answers);
+  return 0;
+}
 
- private:
-  lockstep::Bus& bus_;
-  std::map<uint32_t, lockstep::Writer<lockstep::msg::Image>> images_;
+// One client's ticks and the barrier samples of those same ticks.
+struct Series {
+  std::vector<double> tick_us, barrier_us;
 };
+
+// `child` ticks `n` times; its round trips and the coordinator's barrier samples of those
+// ticks (synchronous mode: only client requests start ticks) go into `into`.
+void Block(ChildProcess& child, int n, const lockstep::Coordinator& coordinator, Series* into) {
+  const size_t before = coordinator.stats().barrier_us.size();
+  const std::vector<double> ticks = lockstep::bench::ParseNumbers(child.Ask("tick " + std::to_string(n)));
+  const auto all = coordinator.stats().barrier_us;
+  if (into == nullptr) return;
+  into->tick_us.insert(into->tick_us.end(), ticks.begin(), ticks.end());
+  into->barrier_us.insert(into->barrier_us.end(), all.begin() + static_cast<long>(std::min(before, all.size())), all.end());
+}
 
 }  // namespace
 
 int main(int argc, char** argv) {
+  if (argc > 2 && std::strcmp(argv[1], "--child") == 0) return RunChild(std::atoi(argv[2]));
   setenv("LOCKSTEP_LOG", "warn", 0);
   lockstep::InitLogging("bench");
-  const int ticks = argc > 1 ? std::atoi(argv[1]) : 2000;
+  const int ticks = std::max(kBlock, argc > 1 ? std::atoi(argv[1]) / kBlock * kBlock : 2000);
   const int domain = lockstep::LockFreeDdsDomain();  // none shared with tests or other benchmarks running now
   const std::string dom = std::to_string(domain);
+  const double load_start = LoadAverage();
 
   lockstep::LaunchConfig config;
   config.domain_id = domain;
@@ -119,92 +147,100 @@ int main(int argc, char** argv) {
   config.world.synchronous_mode(true);
   config.world.service_timeout(30);
   config.services.push_back({"noop", "noop", "", {}, true, false, "never"});
-  config.services.push_back({"camera", "bench_camera", "", {}, true, true, "never"});
+  config.services.push_back({"camera", "bench_camera", "", {}, false, true, "never"});  // joins for step 3 only
   const pid_t noop = Spawn({BinDir() + "/lockstep_noop", "--name", "noop", "--domain", dom});
 
   auto coordinator_bus = lockstep::CreateDdsBus({domain, "", "lockstep.participant", "bench-coordinator"});
-  auto camera_bus = lockstep::CreateDdsBus({domain, "", "lockstep.participant", "bench-camera"});
   lockstep::Coordinator coordinator(*coordinator_bus, config);
-  BenchCamera camera_core(*camera_bus);
-  lockstep::ServiceRunner camera(*camera_bus, lockstep::ServiceOptions{"camera", "bench_camera", true}, camera_core);
   std::atomic<bool> stop{false};
   std::thread coordinator_thread([&] { coordinator.Run(stop); });
-  std::thread camera_thread([&] { camera.Run(stop); });
+  std::unique_ptr<lockstep::Bus> camera_bus;
+  std::unique_ptr<lockstep::bench::BenchCamera> camera_core;
+  std::unique_ptr<lockstep::ServiceRunner> camera;
+  std::thread camera_thread;
+  auto finish = [&](int rc) {
+    stop = true;
+    coordinator_thread.join();
+    if (camera_thread.joinable()) camera_thread.join();
+    kill(noop, SIGTERM);
+    waitpid(noop, nullptr, 0);
+    return rc;
+  };
 
-  double cpp_us = 0, barrier_us = 0;
+  // 1. A C++ client in the coordinator's process.
+  Series in_process;
   try {
-    lockstep::client::ClientOptions o;
-    o.domain = domain;
-    o.timeout_s = 30;
-    lockstep::client::Client client(o);
+    lockstep::client::Client client(Options(domain));
     client.wait_ready(30);
     for (int i = 0; i < 100; ++i) client.tick();  // warm-up
     const size_t before = coordinator.stats().barrier_us.size();
-    std::vector<double> rt;
     for (int i = 0; i < ticks; ++i) {
       const auto t0 = Clock::now();
       client.tick();
-      rt.push_back(std::chrono::duration<double, std::micro>(Clock::now() - t0).count());
+      in_process.tick_us.push_back(std::chrono::duration<double, std::micro>(Clock::now() - t0).count());
     }
     const auto all = coordinator.stats().barrier_us;
-    barrier_us = Median(std::vector<double>(all.begin() + std::min(before, all.size()), all.end()));
-    cpp_us = Median(rt);
-    std::printf("{\"bench\":\"client_tick_cpp\",\"ticks\":%d,\"median_us\":%.1f,\"barrier_median_us\":%.1f}\n", ticks, cpp_us,
-                barrier_us);
-    std::fflush(stdout);
+    in_process.barrier_us.assign(all.begin() + static_cast<long>(std::min(before, all.size())), all.end());
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "bench_client: the C++ part failed: %s\n", e.what());
-    stop = true;
-    coordinator_thread.join();
-    camera_thread.join();
-    kill(noop, SIGTERM);
-    waitpid(noop, nullptr, 0);
-    return 1;
+    std::fprintf(stderr, "bench_client: the in-process C++ client failed: %s\n", e.what());
+    return finish(1);
   }
+  std::printf("{\"bench\":\"client_tick_cpp_in_process\",\"ticks\":%d,\"median_us\":%.1f,\"barrier_median_us\":%.1f}\n", ticks,
+              Median(in_process.tick_us), Median(in_process.barrier_us));
+  std::fflush(stdout);
 
-  // Python: ticks, waypoints, 720p images (client_bench.py prints one JSON line).
-  const std::string out = std::filesystem::temp_directory_path() / ("bench-client-" + std::to_string(getpid()) + ".json");
+  // 2. A C++ and a Python client process, interleaved.
   setenv("PYTHONPATH", LOCKSTEP_BENCH_PYTHONPATH, 1);
-  // The barrier side by side with the Python ticks: in synchronous mode only the client
-  // ticks, so after its 100 warm-up ticks the next `ticks` samples are its measured ones.
-  const size_t py_before = coordinator.stats().barrier_us.size();
-  const pid_t py = Spawn({"/usr/bin/python3", LOCKSTEP_BENCH_SCRIPT, dom, std::to_string(ticks)}, out);
-  int status = 0;
-  waitpid(py, &status, 0);
-  double barrier_py_us = 0;
-  {
-    const auto all = coordinator.stats().barrier_us;
-    const size_t from = std::min(py_before + 100, all.size()), to = std::min(from + ticks, all.size());
-    barrier_py_us = Median(std::vector<double>(all.begin() + from, all.begin() + to));
+  setenv("LOCKSTEP_DOMAIN", dom.c_str(), 1);
+  Series cpp, py;
+  std::string py_summary;
+  try {
+    ChildProcess cpp_child({BinDir() + "/bench_client", "--child", dom});
+    ChildProcess py_child({"/usr/bin/python3", LOCKSTEP_BENCH_SCRIPT});
+    if (cpp_child.ReadLine() != "ready" || py_child.ReadLine() != "ready") throw std::runtime_error("a client did not start");
+    Block(cpp_child, 100, coordinator, nullptr);  // warm-up
+    Block(py_child, 100, coordinator, nullptr);
+    for (int b = 0; b < ticks / kBlock; ++b) {
+      ChildProcess& first = b % 2 ? py_child : cpp_child;
+      ChildProcess& second = b % 2 ? cpp_child : py_child;
+      Block(first, kBlock, coordinator, b % 2 ? &py : &cpp);
+      Block(second, kBlock, coordinator, b % 2 ? &cpp : &py);
+    }
+    cpp_child.Wait();
+    // 3. The camera joins (not required: the barrier still waits for the no-op only).
+    camera_bus = lockstep::CreateDdsBus({domain, "", "lockstep.participant", "bench-camera"});
+    camera_core = std::make_unique<lockstep::bench::BenchCamera>(*camera_bus);
+    camera = std::make_unique<lockstep::ServiceRunner>(*camera_bus, lockstep::ServiceOptions{"camera", "bench_camera", true},
+                                                       *camera_core);
+    camera_thread = std::thread([&] { camera->Run(stop); });
+    py_summary = py_child.Ask("rest");
+    if (py_child.Wait() != 0) throw std::runtime_error("the Python client failed");
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_client: %s\n", e.what());
+    return finish(1);
   }
-  std::string line;
-  if (FILE* f = std::fopen(out.c_str(), "r")) {
-    char buf[4096];
-    while (std::fgets(buf, sizeof(buf), f)) line = buf;
-    std::fclose(f);
-  }
-  std::filesystem::remove(out);
-  stop = true;
-  coordinator_thread.join();
-  camera_thread.join();
-  kill(noop, SIGTERM);
-  waitpid(noop, nullptr, 0);
-  if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || line.empty()) {
-    std::fprintf(stderr, "bench_client: the Python part failed (exit %d)\n", WIFEXITED(status) ? WEXITSTATUS(status) : -1);
-    return 1;
-  }
-  std::map<std::string, double> py_values;
-  // The script prints {"tick_us":..,"waypoint_us":..,"image_ms":..}
-  for (const char* key : {"tick_us", "waypoint_us", "image_ms"}) {
-    const auto at = line.find(std::string("\"") + key + "\":");
-    py_values[key] = at == std::string::npos ? -1 : std::atof(line.c_str() + at + std::strlen(key) + 3);
-  }
-  std::printf("{\"bench\":\"client_python\",\"tick_us\":%.1f,\"get_waypoint_us\":%.2f,\"image_720p_to_numpy_ms\":%.3f}\n",
-              py_values["tick_us"], py_values["waypoint_us"], py_values["image_ms"]);
+  finish(0);
+
+  // The Python process prints {"waypoint_us":..,"image_ms":..,"images":..}.
+  auto value = [&](const char* key) {
+    const auto at = py_summary.find(std::string("\"") + key + "\":");
+    return at == std::string::npos ? -1.0 : std::atof(py_summary.c_str() + at + std::strlen(key) + 3);
+  };
+  const double waypoint_us = value("waypoint_us"), image_ms = value("image_ms");
+  const double cpp_us = Round1(Median(cpp.tick_us)), cpp_barrier = Round1(Median(cpp.barrier_us));
+  const double py_us = Round1(Median(py.tick_us)), py_barrier = Round1(Median(py.barrier_us));
+  const double in_us = Round1(Median(in_process.tick_us));
+  std::printf("{\"bench\":\"client_tick_cpp\",\"ticks\":%zu,\"median_us\":%.1f,\"barrier_median_us\":%.1f}\n", cpp.tick_us.size(),
+              cpp_us, cpp_barrier);
+  std::printf("{\"bench\":\"client_tick_python\",\"ticks\":%zu,\"median_us\":%.1f,\"barrier_median_us\":%.1f}\n", py.tick_us.size(),
+              py_us, py_barrier);
+  std::printf("{\"bench\":\"client_python\",\"get_waypoint_us\":%.2f,\"image_720p_to_numpy_ms\":%.3f,\"images\":%.0f}\n", waypoint_us,
+              image_ms, value("images"));
   std::printf("{\"bench\":\"client\",\"tick_roundtrip_us_cpp\":%.1f,\"tick_roundtrip_us_python\":%.1f,\"get_waypoint_us_python\":%.2f,"
-              "\"image_720p_to_numpy_ms\":%.3f,\"barrier_median_us\":%.1f,\"barrier_median_us_during_python\":%.1f,"
-              "\"python_to_barrier\":%.2f}\n",
-              cpp_us, py_values["tick_us"], py_values["waypoint_us"], py_values["image_ms"], barrier_us, barrier_py_us,
-              barrier_py_us > 0 ? py_values["tick_us"] / barrier_py_us : 0.0);
+              "\"image_720p_to_numpy_ms\":%.3f,\"barrier_median_us\":%.1f,\"python_to_barrier\":%.2f,"
+              "\"barrier_median_us_during_cpp\":%.1f,\"cpp_to_barrier\":%.2f,\"tick_roundtrip_us_cpp_in_process\":%.1f,"
+              "\"load_avg_1m\":[%.2f,%.2f]}\n",
+              cpp_us, py_us, waypoint_us, image_ms, py_barrier, py_barrier > 0 ? py_us / py_barrier : 0.0, cpp_barrier,
+              cpp_barrier > 0 ? cpp_us / cpp_barrier : 0.0, in_us, load_start, LoadAverage());
   return 0;
 }

@@ -1,26 +1,46 @@
-"""The Python half of bench_client: tick round trips, get_waypoint, and the delay from a
-720p image's publication to a numpy view of it in a listen callback. Prints one JSON line."""
+"""The Python client process of bench_client, driven over stdin / stdout:
+  "tick N"  -> N world.tick() round trips (us) on one line (lockstep.carla, as a script would)
+  "rest"    -> get_waypoint (mean us per call), then the delay from a 720p camera image's
+               publication to a numpy view of it in a listen callback; one JSON line, exit.
+The simulation is the one on $LOCKSTEP_DOMAIN. Logging goes to stderr."""
 import json
+import os
 import statistics
 import sys
 import time
 
-import lockstep
-from lockstep.carla.map import Map
-
-domain, ticks = int(sys.argv[1]), int(sys.argv[2])
-c = lockstep.Client(domain=domain, timeout=30)
-c.wait_ready(30)
-for _ in range(100):
-    c.tick()
-rt = []
-for _ in range(ticks):
-    t0 = time.perf_counter()
-    c.tick()
-    rt.append((time.perf_counter() - t0) * 1e6)
+answers = os.fdopen(os.dup(1), 'w')
+os.dup2(2, 1)  # the native module's logging must not mix with the answers
 
 import lockstep.carla as carla  # noqa: E402
-m = Map(c.map(), 'bench')
+from lockstep.carla.map import Map  # noqa: E402
+
+
+def answer(line):
+    answers.write(line + '\n')
+    answers.flush()
+
+
+client = carla.Client('localhost', 2000)
+client.set_timeout(30)
+world = client.get_world()
+native = client._client()
+native.wait_ready(30)
+answer('ready')
+while True:
+    cmd = sys.stdin.readline().split()
+    if cmd == ['rest']:
+        break
+    if len(cmd) != 2 or cmd[0] != 'tick':
+        sys.exit(0)  # end of input (the bench stopped early)
+    rt = []
+    for _ in range(int(cmd[1])):
+        t0 = time.perf_counter()
+        world.tick()
+        rt.append((time.perf_counter() - t0) * 1e6)
+    answer(' '.join('%.1f' % v for v in rt))
+
+m = Map(native.map(), 'bench')
 loc = m.get_spawn_points()[0].location
 calls = 20000
 t0 = time.perf_counter()
@@ -28,7 +48,16 @@ for i in range(calls):
     m.get_waypoint(loc)
 waypoint_us = (time.perf_counter() - t0) / calls * 1e6
 
-camera = c.spawn('sensor.camera.rgb', (0, 0, 2, 1, 0, 0, 0))
+# The camera service joins now: wait until its blueprint is declared.
+deadline = time.monotonic() + 30
+while True:
+    try:
+        camera = native.spawn('sensor.camera.rgb', (0, 0, 2, 1, 0, 0, 0))
+        break
+    except carla.CommandRejected:
+        if time.monotonic() > deadline:
+            raise
+        time.sleep(0.05)
 delays = []
 
 
@@ -39,10 +68,10 @@ def on_image(sample):
     delays.append((time.monotonic() - published) * 1e3)
 
 
-c.tick()
-c.listen(camera, on_image)
+world.tick()
+native.listen(camera, on_image)
 for _ in range(200):
-    c.tick()
-c.stop(camera)
-print(json.dumps({'tick_us': statistics.median(rt), 'waypoint_us': waypoint_us,
-                  'image_ms': statistics.median(delays) if delays else -1, 'images': len(delays)}))
+    world.tick()
+native.stop(camera)
+answer(json.dumps({'waypoint_us': waypoint_us, 'image_ms': statistics.median(delays) if delays else -1,
+                   'images': len(delays)}))

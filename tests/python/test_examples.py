@@ -58,6 +58,9 @@ def test_showcase(sim):
     assert summary['ticks'] == 40
     assert summary['ground_air_frame_alignment'] == '40/40 ticks'
     assert all(summary['sensor_frames_in_order_once'].values())
+    # Continuous sensors: one frame per tick since listen() (40 ticks and the takeoff's), none lost or repeated.
+    assert summary['every_frame_once'] and all(summary['every_frame_once'].values()), summary['every_frame_once']
+    assert summary['frames_since_listen'] > 40
     assert os.path.getsize(os.path.join(out_dir, 'town.png')) > 0
     assert len(open(os.path.join(out_dir, 'ticks.csv')).readlines()) == 41
     assert summary['cars'] == 4 and summary['walkers'] >= 1

@@ -228,6 +228,7 @@ struct World::Impl {
   void InitLights();
   void StepLights(double dt);
   void ResetLightGroup(size_t group);
+  double RedTimeLeft(int light) const;
 
   // traffic_manager.cpp
   void StepTrafficManager(double dt);
@@ -244,7 +245,7 @@ struct World::Impl {
   void StepWalkers(double dt);
   // walker_ai.cpp
   void StepControllers(double dt);
-  bool MayCross(const TownCrosswalk& cw) const;
+  bool MayCross(const TownCrosswalk& cw, double need_s) const;
   void PlanRoute(ControllerActor& c, const Vec3& pos);
   bool ExtendWander(ControllerActor& c, const Vec3& pos);
   uint64_t ControllerSeed(uint32_t id) const;

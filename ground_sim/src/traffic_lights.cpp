@@ -1,5 +1,8 @@
 // Traffic light groups: one per signalled junction. The group's lights take turns:
 // green, yellow, then all red for red_time, then the next light (CARLA's cycle).
+#include <algorithm>
+#include <limits>
+
 #include "internal.h"
 
 namespace lockstep::ground {
@@ -52,6 +55,38 @@ void World::Impl::StepLights(double dt) {
       next.elapsed = 0;
     }
   }
+}
+
+// Seconds until a red light turns green (0 when it is not red), from its group's cycle: what
+// is left of the active light's green, yellow and all-red, then a full turn of each light
+// between. Infinite where the cycle stands still (a frozen group).
+double World::Impl::RedTimeLeft(int light) const {
+  const LightState& l = lights[static_cast<size_t>(light)];
+  if (l.color != LightColor::kRed) return 0;
+  constexpr double kNever = std::numeric_limits<double>::infinity();
+  const size_t g = static_cast<size_t>(l.group);
+  const auto& members = group_lights[g];
+  const size_t n = members.size();
+  const size_t at = static_cast<size_t>(group_current[g]);
+  const LightState& cur = lights[static_cast<size_t>(members[at])];
+  if (cur.frozen || l.frozen) return kNever;
+  double t = 0;
+  if (cur.color == LightColor::kGreen) {
+    t = std::max(0.0, cur.green_time - cur.elapsed) + cur.yellow_time + cur.red_time;
+  } else if (cur.color == LightColor::kYellow) {
+    t = std::max(0.0, cur.yellow_time - cur.elapsed) + cur.red_time;
+  } else if (cur.color == LightColor::kRed && group_all_red[g]) {
+    t = std::max(0.0, cur.red_time - cur.elapsed);
+  } else {
+    return kNever;  // off, or red outside the cycle: it does not advance
+  }
+  for (size_t k = 1; k <= n; ++k) {
+    const int m = members[(at + k) % n];
+    if (m == light) return t;
+    const LightState& o = lights[static_cast<size_t>(m)];
+    t += o.green_time + o.yellow_time + o.red_time;
+  }
+  return t;
 }
 
 std::string World::SetTrafficLight(uint32_t id, std::optional<LightColor> color, double green, double yellow, double red,

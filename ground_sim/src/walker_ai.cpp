@@ -4,6 +4,7 @@
 // the walker waits at the kerb for the walk light and a free road, then crosses.
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "internal.h"
 
@@ -17,6 +18,7 @@ constexpr double kExact = 0.1;        // m: a kerb, a crossing's far end or the 
 constexpr double kOffGraph = 3.0;     // m: farther from its last node, a walker rejoins the nearest one
 constexpr double kClear = 1.0;        // m: room a vehicle must leave to a crossing
 constexpr double kLookAhead = 5.0;    // s: vehicles that would reach the crossing this soon hold it
+constexpr double kClearance = 1.0;    // s: red left for the cars after a walker's crossing time
 
 double SegmentDistance(const Vec2& p, const Vec2& a, const Vec2& b) {
   const Vec2 ab = b - a;
@@ -38,12 +40,16 @@ double Flat(const Vec3& a, const Vec3& b) { return (a - b).head<2>().norm(); }
 }  // namespace
 
 // Walk light and a free road: every light of the lanes crossed is red for the vehicles
-// (CARLA's walkers wait for the light at a crossing), and no vehicle is on the crossing or
-// would reach it within kLookAhead along its Traffic Manager path (else straight on):
-// cars turning in on green, or any car where the crossing has no lights.
-bool World::Impl::MayCross(const TownCrosswalk& cw) const {
+// (CARLA's walkers wait for the light at a crossing) and stays red for need_s more seconds
+// (the walker's time to cross plus kClearance: a pedestrian signal's clearance phase, so
+// walkers do not start late in the red and hold the cars when their light turns green; a
+// frozen red stays red), and no vehicle is on the crossing or would reach it within
+// kLookAhead along its Traffic Manager path (else straight on): cars turning in on green,
+// or any car where the crossing has no lights.
+bool World::Impl::MayCross(const TownCrosswalk& cw, double need_s) const {
   for (int l : cw.lights) {
     if (lights[static_cast<size_t>(l)].color != LightColor::kRed) return false;
+    if (RedTimeLeft(l) < need_s + kClearance) return false;
   }
   const Vec2 a = cw.ends[0].head<2>(), b = cw.ends[1].head<2>();
   for (const auto& [id, v] : vehicles) {
@@ -164,7 +170,9 @@ void World::Impl::StepControllers(double dt) {
       if (c.cross_wait) {
         walk_to(far, true);
         w->control.speed = 0;
-        if (!MayCross(cw)) continue;
+        // Time to cross at the controller's speed (a walker that cannot walk never starts).
+        const double need = c.max_speed > 0.05 ? Flat(pos, far) / c.max_speed : std::numeric_limits<double>::infinity();
+        if (!MayCross(cw, need)) continue;
         c.cross_wait = false;
       }
       if (Flat(pos, far) > kExact) {

@@ -161,6 +161,52 @@ TEST(GroundWalkerNav, GoToLocationCrossesTheRoadAtTheCrossingOnTheWalkLight) {
   EXPECT_LT(closest, 0.5);
 }
 
+// Clearance (a pedestrian signal's flashing don't-walk): the walker starts crossing only
+// if the cars' red lasts its crossing time plus 1 s more. With short red phases (the other
+// lights of the group at 1 s green, 0.5 s yellow, 0.5 s all-red: the crossing's light is
+// red for under 5 s, the crossing takes over 4 s at 1.4 m/s) it stays at the kerb; when
+// the red is frozen (the cycle stands still) it crosses.
+TEST(GroundWalkerNav, AWalkerStartsCrossingOnlyWhenTheRedLastsItsCrossingTime) {
+  const auto town = testing::Town01();
+  const auto& g = town->WalkerNav();
+  const int k = LitCrossing(*town);
+  ASSERT_GE(k, 0);
+  const TownCrosswalk& cw = town->Crosswalks()[static_cast<size_t>(k)];
+  World w(town, 5);
+  std::vector<int> groups;
+  for (int l : cw.lights) groups.push_back(w.Lights()[static_cast<size_t>(l)].state.group);
+  for (const auto& lv : w.Lights()) {
+    if (std::find(groups.begin(), groups.end(), lv.state.group) != groups.end()) {
+      ASSERT_EQ(w.SetTrafficLight(lv.id, std::nullopt, 1.0, 0.5, 0.5, std::nullopt), "");
+    }
+  }
+  ASSERT_EQ(w.AddWalker(9, "walker.pedestrian.0001", {}, Pose::FromYaw(g.Position(AwayFrom(g, cw.nodes[0], cw.centre, 3)) + Vec3(0, 0, 1.0), 0)), "");
+  ASSERT_EQ(w.AddWalkerController(10, 9), "");
+  ASSERT_EQ(w.ControllerStart(10), "");
+  ASSERT_EQ(w.ControllerGoTo(10, g.Position(AwayFrom(g, cw.nodes[1], cw.centre, 3))), "");
+  int red_phases = 0;
+  bool was_red = AllRed(w, cw);
+  for (int i = 0; i < 1200; ++i) {  // 60 s of short red phases
+    w.Step(kDt);
+    ASSERT_FALSE(WalkerGraph::OnDrivingLane(town->Map(), w.Walker(9)->pose.position)) << "stepped off on a short red, step " << i;
+    red_phases += AllRed(w, cw) && !was_red;
+    was_red = AllRed(w, cw);
+  }
+  EXPECT_LT(Flat(w.Walker(9)->pose.position, cw.ends[0]), 0.2) << "not waiting at the kerb";
+  EXPECT_GE(red_phases, 5);
+  // The red frozen: it crosses.
+  for (int l : cw.lights) ASSERT_EQ(w.SetTrafficLight(static_cast<uint32_t>(l + 1), LightColor::kRed, -1, -1, -1, true), "");
+  int on_road = 0;
+  double far = 1e9;
+  for (int i = 0; i < 400; ++i) {
+    w.Step(kDt);
+    on_road += WalkerGraph::OnDrivingLane(town->Map(), w.Walker(9)->pose.position);
+    far = std::min(far, Flat(w.Walker(9)->pose.position, cw.ends[1]));
+  }
+  EXPECT_GT(on_road, 10) << "did not cross on a frozen red";
+  EXPECT_LT(far, 0.2);
+}
+
 // A walker saved on its way (route, kerb wait, crossing) continues bit for bit after a
 // restore: the snapshot of a replacement ground_sim.
 TEST(GroundWalkerNav, ASavedWalkerOnItsRouteContinuesBitForBit) {

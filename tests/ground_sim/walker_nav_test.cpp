@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <string>
 #include <vector>
 
 #include "lockstep/ground/world.h"
@@ -60,19 +61,53 @@ bool AllRed(const World& w, const TownCrosswalk& cw) {
   return true;
 }
 
+// No node on a driving lane (crossing ends are kerbs, off the road), every crossing end
+// joins the sidewalks, and with the crossings the sidewalks form one network.
+void CheckGraph(const Town& town) {
+  const auto& g = town.WalkerNav();
+  for (size_t n = 0; n < g.NodeCount(); ++n) {
+    ASSERT_FALSE(WalkerGraph::OnDrivingLane(town.Map(), g.Position(static_cast<int>(n)))) << "node " << n;
+  }
+  for (const auto& cw : town.Crosswalks()) {
+    for (int node : cw.nodes) {
+      int sidewalk = 0;
+      for (const auto& e : g.Edges(node)) sidewalk += e.crossing < 0;
+      EXPECT_GT(sidewalk, 0) << "a kerb of the crossing at (" << cw.centre.x() << ", " << cw.centre.y() << ") joins no sidewalk";
+    }
+  }
+  std::vector<bool> seen(g.NodeCount(), false);
+  std::vector<int> todo{0};
+  size_t reached = 0;
+  seen[0] = true;
+  while (!todo.empty()) {
+    const int n = todo.back();
+    todo.pop_back();
+    ++reached;
+    for (const auto& e : g.Edges(n)) {
+      if (!seen[static_cast<size_t>(e.to)]) seen[static_cast<size_t>(e.to)] = true, todo.push_back(e.to);
+    }
+  }
+  std::printf("%s walker graph: %zu nodes, %zu crossings, %zu nodes reached from node 0\n", town.Map().Name().c_str(), g.NodeCount(),
+              town.Crosswalks().size(), reached);
+  EXPECT_GT(reached, g.NodeCount() * 95 / 100);
+}
+
 TEST(GroundWalkerNav, TownOneHasASidewalkGraphWithCrossingsAtEveryJunctionMouth) {
   const auto town = testing::Town01();
-  const auto& g = town->WalkerNav();
-  EXPECT_GT(g.NodeCount(), 1000u);
+  EXPECT_GT(town->WalkerNav().NodeCount(), 1000u);
   int derived = 0, lit = 0;
   for (const auto& cw : town->Crosswalks()) derived += cw.derived, lit += !cw.lights.empty();
-  // 12 T junctions, three mouths each.
+  // 12 T junctions, three mouths each, every one with a light.
   EXPECT_EQ(derived, 36);
   EXPECT_EQ(lit, 36);
-  // No node stands on a driving lane (crossing ends are kerbs, off the road).
-  for (size_t n = 0; n < g.NodeCount(); ++n) {
-    ASSERT_FALSE(WalkerGraph::OnDrivingLane(town->Map(), g.Position(static_cast<int>(n)))) << "node " << n;
-  }
+  CheckGraph(*town);
+}
+
+TEST(GroundWalkerNav, TownTwoHasASidewalkGraphWithCrossings) {
+  const auto town = Town::Load(std::string(LOCKSTEP_CARLA_MAPS_DIR) + "/Town02.xodr", 42);
+  EXPECT_GT(town->WalkerNav().NodeCount(), 500u);
+  EXPECT_GT(town->Crosswalks().size(), 10u);
+  CheckGraph(*town);
 }
 
 // go_to_location to a sidewalk point across the road: the walker walks to the crossing,
@@ -124,6 +159,39 @@ TEST(GroundWalkerNav, GoToLocationCrossesTheRoadAtTheCrossingOnTheWalkLight) {
   EXPECT_GT(on_crossing, 10) << "never crossed on the crossing";
   EXPECT_GE(departures, 1);
   EXPECT_LT(closest, 0.5);
+}
+
+// A walker saved on its way (route, kerb wait, crossing) continues bit for bit after a
+// restore: the snapshot of a replacement ground_sim.
+TEST(GroundWalkerNav, ASavedWalkerOnItsRouteContinuesBitForBit) {
+  const auto town = testing::Town01();
+  const auto& g = town->WalkerNav();
+  const int k = LitCrossing(*town);
+  ASSERT_GE(k, 0);
+  const TownCrosswalk& cw = town->Crosswalks()[static_cast<size_t>(k)];
+  World a(town, 5);
+  const uint32_t light = static_cast<uint32_t>(cw.lights[0] + 1);
+  ASSERT_EQ(a.SetTrafficLight(light, LightColor::kGreen, -1, -1, -1, true), "");
+  ASSERT_EQ(a.AddWalker(9, "walker.pedestrian.0001", {}, Pose::FromYaw(g.Position(AwayFrom(g, cw.nodes[0], cw.centre, 4)) + Vec3(0, 0, 1.0), 0)), "");
+  ASSERT_EQ(a.AddWalkerController(10, 9), "");
+  ASSERT_EQ(a.ControllerStart(10), "");
+  ASSERT_EQ(a.ControllerGoTo(10, g.Position(AwayFrom(g, cw.nodes[1], cw.centre, 4))), "");
+  int on_road = 0;
+  for (const int save_at : {60, 400}) {  // on the way to the kerb; waiting at it (then the light runs)
+    while (a.frame() < static_cast<uint64_t>(save_at)) a.Step(kDt);
+    auto r = World::Restore(town, a.Save());
+    ASSERT_EQ(r->StateHash(), a.StateHash());
+    if (save_at == 400) {
+      for (World* w : {&a, r.get()}) ASSERT_EQ(w->SetTrafficLight(light, std::nullopt, -1, -1, -1, false), "");
+    }
+    for (int i = 0; i < (save_at == 400 ? 900 : 300); ++i) {
+      a.Step(kDt);
+      r->Step(kDt);
+      ASSERT_EQ(a.StateHash(), r->StateHash()) << "diverged " << i << " steps after a restore at " << save_at;
+      on_road += WalkerGraph::OnDrivingLane(town->Map(), a.Walker(9)->pose.position);
+    }
+  }
+  EXPECT_GT(on_road, 10) << "the restored walker never crossed";
 }
 
 // A goal round a block corner: the route follows the sidewalks (never farther than 1 m

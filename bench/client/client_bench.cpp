@@ -7,9 +7,11 @@
 //   1. A C++ client in this process (the coordinator's) ticks: the DDS messages between
 //      them never leave the process (tick_roundtrip_us_cpp_in_process).
 //   2. A C++ client and a Python client (lockstep.carla world.tick()), each in its own
-//      process as a user's would be, tick in interleaved blocks of 100, alternating
-//      which goes first, so both see the same load. For each, the median round trip and
-//      the barrier median over its own ticks; the ratios divide the two.
+//      process as a user's would be, tick in interleaved blocks of 500 (after 100
+//      warm-up ticks each), alternating which goes first, so both see the same load; one
+//      client process runs at a time, as each client adds readers to the tick's messages.
+//      For each, the median round trip and the barrier median over its own ticks; the
+//      ratios divide the two.
 //   3. The Python process measures carla Map.get_waypoint, then, with a camera service
 //      (this process, not required, joined only now) publishing a 1280x720 BGRA image
 //      per tick, the delay from the camera's write to a numpy view in a listen callback
@@ -45,7 +47,7 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using lockstep::bench::ChildProcess;
 
-constexpr int kBlock = 100;
+constexpr int kBlock = 500;
 
 double Median(std::vector<double> v) {
   if (v.empty()) return 0;
@@ -195,26 +197,29 @@ int main(int argc, char** argv) {
   Series cpp, py;
   std::string py_summary;
   try {
-    ChildProcess cpp_child({BinDir() + "/bench_client", "--child", dom});
-    ChildProcess py_child({"/usr/bin/python3", LOCKSTEP_BENCH_SCRIPT});
-    if (cpp_child.ReadLine() != "ready" || py_child.ReadLine() != "ready") throw std::runtime_error("a client did not start");
-    Block(cpp_child, 100, coordinator, nullptr);  // warm-up
-    Block(py_child, 100, coordinator, nullptr);
-    for (int b = 0; b < ticks / kBlock; ++b) {
-      ChildProcess& first = b % 2 ? py_child : cpp_child;
-      ChildProcess& second = b % 2 ? cpp_child : py_child;
-      Block(first, kBlock, coordinator, b % 2 ? &py : &cpp);
-      Block(second, kBlock, coordinator, b % 2 ? &cpp : &py);
+    const int rounds = ticks / kBlock;
+    for (int b = 0; b < 2 * rounds; ++b) {
+      // Rounds alternate C++ first and Python first, the last one Python last: ..., C++ Python.
+      const bool cpp_first = (rounds - 1 - b / 2) % 2 == 0;
+      const bool python = cpp_first == (b % 2 == 1);
+      ChildProcess child(python ? std::vector<std::string>{"/usr/bin/python3", LOCKSTEP_BENCH_SCRIPT}
+                                : std::vector<std::string>{BinDir() + "/bench_client", "--child", dom});
+      if (child.ReadLine() != "ready") throw std::runtime_error("a client did not start");
+      Block(child, 100, coordinator, nullptr);  // warm-up
+      Block(child, kBlock, coordinator, python ? &py : &cpp);
+      if (!python || py.tick_us.size() < static_cast<size_t>(ticks)) {
+        if (child.Wait() != 0) throw std::runtime_error("a client process failed");
+        continue;
+      }
+      // 3. The camera joins (not required: the barrier still waits for the no-op only).
+      camera_bus = lockstep::CreateDdsBus({domain, "", "lockstep.participant", "bench-camera"});
+      camera_core = std::make_unique<lockstep::bench::BenchCamera>(*camera_bus);
+      camera = std::make_unique<lockstep::ServiceRunner>(*camera_bus, lockstep::ServiceOptions{"camera", "bench_camera", true},
+                                                         *camera_core);
+      camera_thread = std::thread([&] { camera->Run(stop); });
+      py_summary = child.Ask("rest");
+      if (child.Wait() != 0) throw std::runtime_error("the Python client failed");
     }
-    cpp_child.Wait();
-    // 3. The camera joins (not required: the barrier still waits for the no-op only).
-    camera_bus = lockstep::CreateDdsBus({domain, "", "lockstep.participant", "bench-camera"});
-    camera_core = std::make_unique<lockstep::bench::BenchCamera>(*camera_bus);
-    camera = std::make_unique<lockstep::ServiceRunner>(*camera_bus, lockstep::ServiceOptions{"camera", "bench_camera", true},
-                                                       *camera_core);
-    camera_thread = std::thread([&] { camera->Run(stop); });
-    py_summary = py_child.Ask("rest");
-    if (py_child.Wait() != 0) throw std::runtime_error("the Python client failed");
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_client: %s\n", e.what());
     return finish(1);

@@ -196,7 +196,6 @@ struct Client::Impl {
   Reader<msg::CommandReply> reply_reader;
   Reader<msg::BlueprintSet> blueprint_reader;
   Reader<msg::MapData> map_reader;
-  Reader<msg::Tick> tick_reader;
   Reader<msg::GroundState> ground_reader;
   Reader<msg::AirState> air_reader;
   Reader<msg::SimEvent> event_reader;
@@ -250,9 +249,6 @@ struct Client::Impl {
     map_reader = Reader<msg::MapData>(*bus, topics::kMap, [this](const msg::MapData& m, const SampleInfo&) {
       Update([&] { map_data = m; });
     });
-    tick_reader = Reader<msg::Tick>(*bus, topics::kTick, [this](const msg::Tick& t, const SampleInfo&) {
-      Update([&] { OnTick(t); });
-    });
     ground_reader = Reader<msg::GroundState>(*bus, topics::kGroundState, [this](const msg::GroundState& g, const SampleInfo&) {
       auto p = std::make_shared<const msg::GroundState>(g);
       Update(kFrame, [&] { OnGround(std::move(p)); });
@@ -292,7 +288,6 @@ struct Client::Impl {
     actors_reader = {};
     air_reader = {};
     ground_reader = {};
-    tick_reader = {};
     map_reader = {};
     blueprint_reader = {};
     reply_reader = {};
@@ -504,17 +499,6 @@ struct Client::Impl {
   bool MayAddFromState(uint32_t run, uint64_t frame, uint32_t id) const {
     if (removed.count({run, id})) return false;
     return !(listed_run == run && frame <= listed_frame && !listed.count(id));
-  }
-
-  void OnTick(const msg::Tick& t) {
-    for (const auto& c : t.commands()) {
-      const auto& b = c.body();
-      if (b._d() == msg::CommandKind::CMD_SPAWN_ACTOR) {
-        AddActor(t.run(), t.frame(), b.spawn_actor(), b.spawn_actor().actor());
-      } else if (b._d() == msg::CommandKind::CMD_DESTROY_ACTOR && t.run() == actors_run) {
-        RemoveActor(b.destroy_actor().actor());
-      }
-    }
   }
 
   template <class State>

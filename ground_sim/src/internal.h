@@ -164,6 +164,34 @@ struct ContactRecord {
   dContactGeom geom{};
 };
 
+// The walkers at the start of a step sorted by x (then id), for neighbour queries without
+// an O(n^2) scan: a query near x looks at the entries whose start x is within its reach
+// (walker_crowd.cpp).
+struct WalkerSweep {
+  struct Entry {
+    double x = 0;                        // sort key: x at the start of the step
+    uint32_t id = 0;
+    Vec3 position = Vec3::Zero();        // StepWalkers moves it with the walker
+    Vec3 velocity = Vec3::Zero();        // of the last step
+    double radius = 0, half_height = 0;
+  };
+  std::vector<Entry> entries;            // by x, then id
+  std::vector<uint32_t> ids;             // walker ids in order
+  std::vector<size_t> slot;              // index in ids -> entry
+  double max_radius = 0;
+  void Build(const std::map<uint32_t, std::unique_ptr<WalkerActor>>& walkers);
+  size_t Find(uint32_t id) const;        // the walker's entry
+  std::pair<size_t, size_t> Range(double x, double reach) const;
+  // Another capsule within the sum of radii + kWalkerGap of `to` that the move from `from`
+  // brings closer blocks the move (not one it overlaps already: spawned so, Push parts them).
+  bool Blocks(size_t self, const Vec3& from, const Vec3& to, double reach) const;
+  // Walkers within kPersonalSpace of this one's capsule (or overlapping it) push it away
+  // (at most push_speed x dt): a crowd spawned overlapping spreads out.
+  Eigen::Vector2d Push(size_t self, double push_speed, double dt) const;
+  // Another walker stands on `target` (within the sum of radii + 0.05 m).
+  bool Occupied(size_t self, const Vec3& target) const;
+};
+
 struct World::Impl {
   std::shared_ptr<const Town> town;
   uint64_t seed = 0;
@@ -188,6 +216,7 @@ struct World::Impl {
   std::map<uint32_t, ControllerActor> controllers;
   std::vector<std::unique_ptr<ExternalActor>> externals;
   std::map<uint32_t, std::unique_ptr<PropActor>> props;
+  WalkerSweep crowd;                     // rebuilt at each walker step, not state
   std::vector<LightState> lights;
   std::vector<int> group_current;        // per group: index into its lights of the green one
   std::vector<std::vector<int>> group_lights;
@@ -245,6 +274,8 @@ struct World::Impl {
   void StepWalkers(double dt);
   // walker_ai.cpp
   void StepControllers(double dt);
+  void StepController(ControllerActor& c, WalkerActor& w, size_t self, double dt);
+  Vec3 AvoidWalkers(size_t self, const Vec3& dir, double speed, bool on_road) const;
   bool MayCross(const TownCrosswalk& cw, double need_s) const;
   void PlanRoute(ControllerActor& c, const Vec3& pos);
   bool ExtendWander(ControllerActor& c, const Vec3& pos);

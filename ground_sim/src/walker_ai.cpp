@@ -7,6 +7,7 @@
 #include <limits>
 
 #include "internal.h"
+#include "walker_crowd.h"
 
 namespace lockstep::ground {
 namespace {
@@ -149,86 +150,107 @@ bool World::Impl::ExtendWander(ControllerActor& c, const Vec3& pos) {
   return true;
 }
 
+// Controllers in id order; each walker then steers round the walkers ahead of it.
 void World::Impl::StepControllers(double dt) {
-  const WalkerGraph& g = town->WalkerNav();
+  crowd.Build(walkers);
   for (auto& [id, c] : controllers) {
     WalkerActor* w = FindWalker(c.walker);
     if (!w || !c.running) continue;
-    const Vec3 pos = BodyPose(w->body).position;
-    w->control.jump = false;
-    auto walk_to = [&](const Vec3& target, bool exact) {
-      Vec3 d = target - pos;
-      d.z() = 0;
-      const double n = d.norm();
-      if (n > 1e-9) w->control.direction = d / n;
-      w->control.speed = exact ? std::min(c.max_speed, n / dt) : c.max_speed;
-    };
-    // On a crossing: wait at the kerb for the walk light and a free road, then cross.
-    if (c.crossing >= 0) {
-      const TownCrosswalk& cw = g.Crossings()[static_cast<size_t>(c.crossing)];
-      const Vec3& far = cw.ends[c.cross_end];
-      if (c.cross_wait) {
-        walk_to(far, true);
-        w->control.speed = 0;
-        // Time to cross at the controller's speed (a walker that cannot walk never starts).
-        const double need = c.max_speed > 0.05 ? Flat(pos, far) / c.max_speed : std::numeric_limits<double>::infinity();
-        if (!MayCross(cw, need)) continue;
-        c.cross_wait = false;
-      }
-      if (Flat(pos, far) > kExact) {
-        walk_to(far, true);
-        continue;
-      }
-      c.came_from = c.at_node;
-      c.at_node = cw.nodes[c.cross_end];
-      c.drawn_node = c.at_node;  // just crossed: no draw to cross straight back
-      c.crossing = -1;
-      if (!c.route.empty() && c.route.front().first == c.at_node) c.route.pop_front();
+    const size_t self = crowd.Find(c.walker);
+    StepController(c, *w, self, dt);
+    if (w->control.speed > 0) {
+      w->control.direction = AvoidWalkers(self, w->control.direction, w->control.speed, c.crossing >= 0 && !c.cross_wait);
     }
-    if (c.has_goal && !c.planned) PlanRoute(c, pos);
-    bool moving = false;
-    for (int guard = 0; guard < 4 && !moving; ++guard) {
-      if (c.route.empty()) {
-        if (c.has_goal) {
-          if (Flat(pos, c.goal_point) > kExact) {
-            walk_to(c.goal_point, true);
-          } else {
-            // Arrived: CARLA's walker then sets off to a new random place; here it wanders.
-            c.has_goal = false;
-            c.planned = false;
-            w->control.speed = 0;
-          }
-          moving = true;
-          break;
+  }
+}
+
+void World::Impl::StepController(ControllerActor& c, WalkerActor& walker, size_t self, double dt) {
+  const WalkerGraph& g = town->WalkerNav();
+  WalkerActor* w = &walker;
+  const Vec3 pos = BodyPose(w->body).position;
+  w->control.jump = false;
+  auto walk_to = [&](const Vec3& target, bool exact) {
+    Vec3 d = target - pos;
+    d.z() = 0;
+    const double n = d.norm();
+    if (n > 1e-9) w->control.direction = d / n;
+    w->control.speed = exact ? std::min(c.max_speed, n / dt) : c.max_speed;
+  };
+  // Within tol of the target, or, for a crossing's far end, the goal or a node on the way
+  // (queue true), within kQueue of it, off the road, while another walker stands on it. A
+  // kerb where the walker will wait is reached only exactly: a walker behind one waiting
+  // there waits behind it (walkers queueing round a kerb and crossing from there slowed
+  // Town01's traffic from 16.7 to 14.8 km/h).
+  auto reached = [&](const Vec3& target, double tol, bool queue) {
+    const double d = Flat(pos, target);
+    if (d < tol) return true;
+    return queue && d < kQueue && crowd.Occupied(self, target) && !WalkerGraph::OnDrivingLane(town->Map(), pos);
+  };
+  // On a crossing: wait at the kerb for the walk light and a free road, then cross.
+  if (c.crossing >= 0) {
+    const TownCrosswalk& cw = g.Crossings()[static_cast<size_t>(c.crossing)];
+    const Vec3& far = cw.ends[c.cross_end];
+    if (c.cross_wait) {
+      walk_to(far, true);
+      w->control.speed = 0;
+      // Time to cross at the controller's speed (a walker that cannot walk never starts).
+      const double need = c.max_speed > 0.05 ? Flat(pos, far) / c.max_speed : std::numeric_limits<double>::infinity();
+      if (!MayCross(cw, need)) return;
+      c.cross_wait = false;
+    }
+    if (!reached(far, kExact, true)) {
+      walk_to(far, true);
+      return;
+    }
+    c.came_from = c.at_node;
+    c.at_node = cw.nodes[c.cross_end];
+    c.drawn_node = c.at_node;  // just crossed: no draw to cross straight back
+    c.crossing = -1;
+    if (!c.route.empty() && c.route.front().first == c.at_node) c.route.pop_front();
+  }
+  if (c.has_goal && !c.planned) PlanRoute(c, pos);
+  bool moving = false;
+  for (int guard = 0; guard < 4 && !moving; ++guard) {
+    if (c.route.empty()) {
+      if (c.has_goal) {
+        if (!reached(c.goal_point, kExact, true)) {
+          walk_to(c.goal_point, true);
+        } else {
+          // Arrived: CARLA's walker then sets off to a new random place; here it wanders.
+          c.has_goal = false;
+          c.planned = false;
+          w->control.speed = 0;
         }
-        if (!ExtendWander(c, pos)) break;
-      }
-      const auto [node, crossing] = c.route.front();
-      if (crossing >= 0) {  // at the kerb: the crossing starts
-        c.crossing = crossing;
-        c.cross_end = g.Crossings()[static_cast<size_t>(crossing)].nodes[0] == node ? 0 : 1;
-        c.cross_wait = true;
-        walk_to(g.Position(node), true);
-        w->control.speed = 0;
         moving = true;
         break;
       }
-      // A kerb before a crossing is reached exactly, other nodes are passed.
-      bool exact = c.route.size() >= 2 && c.route[1].second >= 0;
-      if (c.route.size() == 1 && !c.has_goal) {
-        for (const auto& e : g.Edges(node)) exact |= e.crossing >= 0;
-      }
-      if (Flat(pos, g.Position(node)) < (exact ? kExact : kPass)) {
-        c.came_from = c.at_node;
-        c.at_node = node;
-        c.route.pop_front();
-        continue;
-      }
-      walk_to(g.Position(node), exact);
-      moving = true;
+      if (!ExtendWander(c, pos)) break;
     }
-    if (!moving) w->control.speed = 0;
+    const auto [node, crossing] = c.route.front();
+    if (crossing >= 0) {  // at the kerb: the crossing starts
+      c.crossing = crossing;
+      c.cross_end = g.Crossings()[static_cast<size_t>(crossing)].nodes[0] == node ? 0 : 1;
+      c.cross_wait = true;
+      walk_to(g.Position(node), true);
+      w->control.speed = 0;
+      moving = true;
+      break;
+    }
+    // A kerb before a crossing is reached exactly, other nodes are passed.
+    bool exact = c.route.size() >= 2 && c.route[1].second >= 0;
+    if (c.route.size() == 1 && !c.has_goal) {
+      for (const auto& e : g.Edges(node)) exact |= e.crossing >= 0;
+    }
+    if (reached(g.Position(node), exact ? kExact : kPass, !exact)) {
+      c.came_from = c.at_node;
+      c.at_node = node;
+      c.route.pop_front();
+      continue;
+    }
+    walk_to(g.Position(node), exact);
+    moving = true;
   }
+  if (!moving) w->control.speed = 0;
 }
 
 }  // namespace lockstep::ground

@@ -1,9 +1,11 @@
 // Walkers: kinematic capsules that follow their WalkerControl, stand on the town's
-// surfaces and stop at walls; the AI controller's commands (its step: walker_ai.cpp).
+// surfaces and stop at walls and at each other (walker_crowd.cpp); the AI controller's
+// commands (its step: walker_ai.cpp).
 #include <algorithm>
 #include <cmath>
 
 #include "internal.h"
+#include "walker_crowd.h"
 
 namespace lockstep::ground {
 namespace {
@@ -24,24 +26,36 @@ void BlockCallback(void* data, dGeomID o1, dGeomID o2) {
 
 }  // namespace
 
+// In id order, each walker against the walkers before it where they moved to and the ones
+// after it where they stand: no step ends inside another capsule (Gauss-Seidel).
 void World::Impl::StepWalkers(double dt) {
+  crowd.Build(walkers);
+  double max_step = 0;
+  for (const auto& [id, wp] : walkers) max_step = std::max(max_step, std::max(0.0, wp->control.speed) * dt);
+  // How far apart in x (at the start) two walkers may be and still meet: the radii and the
+  // gap, and both moves (a slide is up to 1.007 times the step).
+  const double reach = 2 * crowd.max_radius + kWalkerGap + 1.1 * (max_step + kPushSpeed * dt);
   for (auto& [id, wp] : walkers) {
     WalkerActor& w = *wp;
+    const size_t self = crowd.Find(id);
     const Pose pose = BodyPose(w.body);
     const double half_h = w.spec->height / 2;
     Vec3 dir = w.control.direction;
     dir.z() = 0;
     const double n = dir.norm();
-    Vec3 step = Vec3::Zero();
-    if (n > 1e-9 && w.control.speed > 0) step = dir / n * (w.control.speed * dt);
+    Vec3 walk = Vec3::Zero();
+    if (n > 1e-9 && w.control.speed > 0) walk = dir / n * (w.control.speed * dt);
+    Vec3 step = walk;
+    step.head<2>() += crowd.Push(self, kPushSpeed, dt);
     Vec3 next = pose.position + step;
     if (!step.isZero()) {
-      // Blocked by a wall, pole or building: slide along it (the step turned by 45 and
-      // then 90 degrees, left first), else stay.
+      // Blocked by a wall, pole, building or another walker: slide along it (the step
+      // turned by 45 and then 90 degrees, left first), else stay.
       bool moved = false;
       for (double turn : {0.0, 0.785398, -0.785398, 1.570796, -1.570796}) {
         const Eigen::Vector2d d = Eigen::Rotation2Dd(turn) * step.head<2>() * (turn == 0 ? 1.0 : std::cos(turn) + 0.3);
         const Vec3 candidate = pose.position + Vec3(d.x(), d.y(), 0);
+        if (crowd.Blocks(self, pose.position, candidate, reach)) continue;
         SetBodyPose(w.body, Pose::FromYaw(candidate, pose.Yaw()));
         BlockQuery q;
         dSpaceCollide2(w.geom, reinterpret_cast<dGeomID>(static_space), &q, &BlockCallback);
@@ -71,7 +85,8 @@ void World::Impl::StepWalkers(double dt) {
       }
     }
     next.z() = z;
-    const double yaw = step.head<2>().norm() > 1e-6 ? std::atan2(step.y(), step.x()) : pose.Yaw();
+    crowd.entries[self].position = next;
+    const double yaw = walk.head<2>().norm() > 1e-6 ? std::atan2(walk.y(), walk.x()) : pose.Yaw();
     w.velocity = (next - pose.position) / dt;
     // Kinematic body: ODE carries it over the sub-steps with this velocity.
     SetBodyPose(w.body, Pose::FromYaw(pose.position, yaw));

@@ -7,6 +7,8 @@
 #include <limits>
 #include <queue>
 
+#include "lockstep/map/crossings.h"
+
 namespace lockstep::ground {
 namespace {
 
@@ -35,12 +37,7 @@ bool WalkableSegment(const map::Map& m, const Vec3& a, const Vec3& b) {
 
 }  // namespace
 
-bool WalkerGraph::OnDrivingLane(const map::Map& m, const Vec3& p) {
-  for (const map::LanePoint& lp : m.LanesAt(p.x(), p.y())) {
-    if (m.Nodes()[static_cast<size_t>(lp.node)].type == map::LaneType::Driving) return true;
-  }
-  return false;
-}
+bool WalkerGraph::OnDrivingLane(const map::Map& m, const Vec3& p) { return map::OnDrivingLane(m, p); }
 
 int WalkerGraph::AddNode(const Vec3& p) {
   pos_.push_back(p);
@@ -60,7 +57,6 @@ void WalkerGraph::Connect(int a, int b, int crossing) {
 
 WalkerGraph::WalkerGraph(const map::Map& m, std::vector<TownCrosswalk> crosswalks,
                          const std::function<int(int, int, int, const Eigen::Vector3d&)>& light_of_lane) {
-  const auto& roads = m.Data().roads;
   // 1. Sidewalk lanes: a node every ~kSpacing m, both ends included; points standing on a
   //    driving lane (a junction's sidewalk drawn over another connecting road) are left out.
   std::vector<int> lane_ends;  // nodes at the two ends of every sidewalk lane
@@ -94,50 +90,17 @@ WalkerGraph::WalkerGraph(const map::Map& m, std::vector<TownCrosswalk> crosswalk
   //    one side of its end to the sidewalk on the other, straight across the driving lanes,
   //    kMouthSetback into the junction (past the stop line, where cars wait).
   std::vector<TownCrosswalk> derived;
-  for (size_t r = 0; r < roads.size(); ++r) {
-    const map::Road& road = roads[r];
-    if (road.junction_index >= 0 || road.sections.empty()) continue;
-    for (const bool at_end : {false, true}) {
-      const map::RoadLink& link = at_end ? road.successor : road.predecessor;
-      if (link.kind != map::RoadLink::Kind::Junction) continue;
-      const int sec = at_end ? static_cast<int>(road.sections.size()) - 1 : 0;
-      const map::LaneSection& ls = road.sections[static_cast<size_t>(sec)];
-      int left = 0, right = 0;  // innermost sidewalk lane on each side
-      std::vector<int> driving;
-      for (const map::Lane& l : ls.lanes) {
-        if (l.type == map::LaneType::Sidewalk && l.id > 0 && (left == 0 || l.id < left)) left = l.id;
-        if (l.type == map::LaneType::Sidewalk && l.id < 0 && (right == 0 || l.id > right)) right = l.id;
-        if (l.type == map::LaneType::Driving) driving.push_back(l.id);
-      }
-      if (left == 0 || right == 0 || driving.empty()) continue;
-      const double s_end = at_end ? road.length - 1e-3 : 1e-3;
-      const double s_in = at_end ? std::max(0.0, road.length - 1.0) : std::min(road.length, 1.0);
-      const int ri = static_cast<int>(r);
-      const Vec3 pl = m.MakeWaypoint(ri, sec, left, s_end).transform.location;
-      const Vec3 pr = m.MakeWaypoint(ri, sec, right, s_end).transform.location;
-      Vec3 out = pl - m.MakeWaypoint(ri, sec, left, s_in).transform.location;
-      out.z() = 0;
-      if (out.norm() < 1e-6) continue;
-      out.normalize();
-      TownCrosswalk cw;
-      bool ok = false;
-      for (const double setback : {kMouthSetback, 1.0, 0.0}) {
-        cw.ends[0] = pl + out * setback;
-        cw.ends[1] = pr + out * setback;
-        if (!OnDrivingLane(m, cw.ends[0]) && !OnDrivingLane(m, cw.ends[1])) {
-          ok = true;
-          break;
-        }
-      }
-      if (!ok) continue;
-      cw.centre = (cw.ends[0] + cw.ends[1]) / 2;
-      cw.derived = true;
-      for (int lane : driving) {
-        const int light = light_of_lane(ri, sec, lane, cw.centre);
-        if (light >= 0 && std::find(cw.lights.begin(), cw.lights.end(), light) == cw.lights.end()) cw.lights.push_back(light);
-      }
-      derived.push_back(std::move(cw));
+  for (const map::MouthCrossing& mc : map::JunctionMouthCrossings(m, kMouthSetback)) {
+    TownCrosswalk cw;
+    cw.ends[0] = mc.ends[0];
+    cw.ends[1] = mc.ends[1];
+    cw.centre = (cw.ends[0] + cw.ends[1]) / 2;
+    cw.derived = true;
+    for (int lane : mc.driving_lanes) {
+      const int light = light_of_lane(mc.road, mc.section, lane, cw.centre);
+      if (light >= 0 && std::find(cw.lights.begin(), cw.lights.end(), light) == cw.lights.end()) cw.lights.push_back(light);
     }
+    derived.push_back(std::move(cw));
   }
   crossings_ = std::move(crosswalks);
   for (auto& cw : derived) crossings_.push_back(std::move(cw));

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "lockstep/map/crossings.h"
 #include "map_internal.h"
 
 namespace lockstep::map {
@@ -47,6 +48,25 @@ void AddStripe(Mesh& m, const Road& road, double s0, double s1, BorderT border, 
   }
 }
 
+// Zebra stripes of a junction-mouth crossing: bands along the road (into_junction),
+// `o.junction_crosswalk_width_m` long, 0.5 m wide every 1 m across it, only where they lie
+// on a driving lane; centred on the walkers' crossing line.
+void AddMouthZebra(Mesh& paint, const Map& map, const MouthCrossing& c, const RoadMeshOptions& o) {
+  const Eigen::Vector3d span = c.ends[1] - c.ends[0];
+  const double len = span.head<2>().norm();
+  if (len < 1.0 || len > 60.0) return;
+  const Eigen::Vector3d across = Eigen::Vector3d(span.x(), span.y(), 0) / len;
+  const Eigen::Vector3d half_band = c.into_junction * (0.5 * o.junction_crosswalk_width_m);
+  const Eigen::Vector3d half_stripe = across * 0.25;
+  for (double u = 0.5; u + 0.5 <= len; u += 1.0) {
+    const Eigen::Vector3d mid = c.ends[0] + span * (u / len);
+    if (!OnDrivingLane(map, mid) || !OnDrivingLane(map, mid - half_band) || !OnDrivingLane(map, mid + half_band)) continue;
+    const Eigen::Vector3d lift(0, 0, o.marking_lift_m);
+    paint.AddQuad(mid - half_band - half_stripe + lift, mid + half_band - half_stripe + lift, mid + half_band + half_stripe + lift,
+                  mid - half_band + half_stripe + lift, Eigen::Vector3d::UnitZ());
+  }
+}
+
 }  // namespace
 
 std::vector<Mesh> BuildRoadMeshes(const Map& map, const RoadMeshOptions& o, std::uint32_t first_instance_id) {
@@ -57,6 +77,8 @@ std::vector<Mesh> BuildRoadMeshes(const Map& map, const RoadMeshOptions& o, std:
   const double scale = std::max(1.0, total / 200000.0);  // bound the work on huge or hostile maps
   std::vector<LaneSpan> spans_a, spans_b;
   const Eigen::Vector3d up = Eigen::Vector3d::UnitZ();
+  std::vector<MouthCrossing> mouths;
+  if (o.junction_crosswalks) mouths = JunctionMouthCrossings(map);
   for (const Road& road : od.roads) {
     Mesh surf, walk, verge, paint;
     surf.name = "road_" + road.id;
@@ -154,6 +176,9 @@ std::vector<Mesh> BuildRoadMeshes(const Map& map, const RoadMeshOptions& o, std:
       };
       for (double v = v0 + 0.25; v + 0.5 <= v1 + 1e-9; v += 1.0)
         paint.AddQuad(P(u0, v), P(u1, v), P(u1, v + 0.5), P(u0, v + 0.5), up);
+    }
+    for (const MouthCrossing& c : mouths) {
+      if (&od.roads[static_cast<std::size_t>(c.road)] == &road) AddMouthZebra(paint, map, c, o);
     }
     for (Mesh* m : {&surf, &walk, &verge, &paint}) {
       if (m->indices.empty()) continue;

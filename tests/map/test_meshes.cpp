@@ -6,6 +6,7 @@
 #include <Eigen/Geometry>
 
 #include "lockstep/map/buildings.h"
+#include "lockstep/map/crossings.h"
 #include "lockstep/map/road_mesh.h"
 #include "lockstep/map/scene_mesh.h"
 #include "lockstep/map/town_generator.h"
@@ -105,6 +106,41 @@ TEST(map_meshes, CarlaTownRoadMeshes) {
     }
   }
   EXPECT_NEAR(road_area, expected, 0.01 * expected);
+}
+
+// Town01's OpenDRIVE has no crosswalk objects; the walkers cross at every junction mouth
+// (crossings.h) and the markings show a zebra there: paint across the driving lanes, none
+// on the sidewalks, and nothing of it with the option off.
+TEST(map_meshes, JunctionMouthsOfTown01HaveZebraCrossings) {
+  const Map m = Map::Load(std::string(LOCKSTEP_CARLA_MAPS_DIR) + "/Town01.xodr");
+  const std::vector<MouthCrossing> mouths = JunctionMouthCrossings(m);
+  ASSERT_GE(mouths.size(), 30u);
+  auto paint_near = [&](const std::vector<Mesh>& meshes, const Eigen::Vector3d& p, double radius) {
+    int n = 0;
+    for (const Mesh& mesh : meshes) {
+      if (mesh.semantic_tag != semantic::kRoadLine) continue;
+      for (std::size_t i = 0; i + 2 < mesh.vertices.size(); i += 3) {
+        if (std::hypot(mesh.vertices[i] - p.x(), mesh.vertices[i + 1] - p.y()) < radius) ++n;
+      }
+    }
+    return n;
+  };
+  const std::vector<Mesh> with = BuildRoadMeshes(m);
+  RoadMeshOptions off;
+  off.junction_crosswalks = false;
+  const std::vector<Mesh> without = BuildRoadMeshes(m, off);
+  for (const MouthCrossing& c : mouths) {
+    const Eigen::Vector3d centre = (c.ends[0] + c.ends[1]) / 2;
+    const double half = (c.ends[1] - c.ends[0]).head<2>().norm() / 2;
+    ASSERT_TRUE(OnDrivingLane(m, centre));
+    EXPECT_FALSE(OnDrivingLane(m, c.ends[0]));
+    EXPECT_FALSE(OnDrivingLane(m, c.ends[1]));
+    // A zebra stripe has 4 corners; the road's own lines near a mouth add some, the zebra
+    // at least 4 per driving lane crossed.
+    const int zebra = paint_near(with, centre, half) - paint_near(without, centre, half);
+    EXPECT_GE(zebra, 4 * static_cast<int>(c.driving_lanes.size())) << "road index " << c.road;
+    EXPECT_EQ(paint_near(with, c.ends[0], 0.4) - paint_near(without, c.ends[0], 0.4), 0) << "no paint on the kerb";
+  }
 }
 
 TEST(map_meshes, WorldTriangleBudgetAndUniqueInstances) {

@@ -13,6 +13,10 @@ struct RoadMeshOptions {
   double marking_lift_m = 0.02;   // paint sits this far above the road surface
   double dash_length_m = 3.0;     // broken lines: dash and gap
   double dash_gap_m = 6.0;
+  // Zebra crossings where a road with sidewalks enters a junction (crossings.h): where
+  // ground_sim's walkers cross; CARLA's towns have them painted, their OpenDRIVE files not.
+  bool junction_crosswalks = true;
+  double junction_crosswalk_width_m = 3.0;  // along the road
 };
 
 // Per road: "road_<id>" (Roads: driving, shoulder, parking, ...), "sidewalk_<id>"

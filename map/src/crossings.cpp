@@ -24,6 +24,7 @@ std::vector<MouthCrossing> JunctionMouthCrossings(const Map& m, double setback) 
       if (link.kind != RoadLink::Kind::Junction) continue;
       MouthCrossing c;
       c.road = static_cast<int>(r);
+      c.at_end = at_end;
       c.section = at_end ? static_cast<int>(road.sections.size()) - 1 : 0;
       const LaneSection& ls = road.sections[static_cast<size_t>(c.section)];
       int left = 0, right = 0;  // innermost sidewalk lane on each side

@@ -129,10 +129,27 @@ TEST(map_meshes, JunctionMouthsOfTown01HaveZebraCrossings) {
   RoadMeshOptions off;
   off.junction_crosswalks = false;
   const std::vector<Mesh> without = BuildRoadMeshes(m, off);
+  std::size_t at_two_metres = 0;
   for (const MouthCrossing& c : mouths) {
     const Eigen::Vector3d centre = (c.ends[0] + c.ends[1]) / 2;
     const double half = (c.ends[1] - c.ends[0]).head<2>().norm() / 2;
     ASSERT_TRUE(OnDrivingLane(m, centre));
+    // Straight across the road, `setback` (2 m; 1 or 0 where 2 m would stand on a lane)
+    // past the middle of the road's end, into the junction.
+    EXPECT_LT(std::abs((c.ends[1] - c.ends[0]).normalized().dot(c.into_junction)), 0.02) << "road index " << c.road;
+    const Road& road = m.Data().roads[static_cast<std::size_t>(c.road)];
+    const double s_end = c.at_end ? road.length - 1e-3 : 1e-3;
+    Eigen::Vector3d end_mid = Eigen::Vector3d::Zero();
+    for (int lane : c.driving_lanes) end_mid += m.MakeWaypoint(c.road, c.section, lane, s_end).transform.location;
+    end_mid /= static_cast<double>(c.driving_lanes.size());
+    const double setback = (centre - end_mid).dot(c.into_junction);
+    EXPECT_TRUE(std::abs(setback - 2) < 0.05 || std::abs(setback - 1) < 0.05 || std::abs(setback) < 0.05) << setback;
+    if (std::abs(setback - 2) < 0.05) ++at_two_metres;
+    bool in_junction = false;
+    for (const LanePoint& lp : m.LanesAt(centre.x(), centre.y())) {
+      in_junction |= m.Data().roads[static_cast<std::size_t>(m.Nodes()[static_cast<std::size_t>(lp.node)].road)].junction_index >= 0;
+    }
+    EXPECT_TRUE(in_junction || setback < 0.05) << "road index " << c.road;
     EXPECT_FALSE(OnDrivingLane(m, c.ends[0]));
     EXPECT_FALSE(OnDrivingLane(m, c.ends[1]));
     // A zebra stripe has 4 corners; the road's own lines near a mouth add some, the zebra
@@ -141,6 +158,7 @@ TEST(map_meshes, JunctionMouthsOfTown01HaveZebraCrossings) {
     EXPECT_GE(zebra, 4 * static_cast<int>(c.driving_lanes.size())) << "road index " << c.road;
     EXPECT_EQ(paint_near(with, c.ends[0], 0.4) - paint_near(without, c.ends[0], 0.4), 0) << "no paint on the kerb";
   }
+  EXPECT_GE(at_two_metres, mouths.size() * 3 / 4);
 }
 
 TEST(map_meshes, WorldTriangleBudgetAndUniqueInstances) {

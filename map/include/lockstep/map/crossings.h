@@ -14,6 +14,7 @@ namespace lockstep::map {
 struct MouthCrossing {
   int road = -1;     // index into MapData::roads (not a junction's connecting road)
   int section = -1;  // the road's lane section at the junction end
+  bool at_end = false;  // the road's end (successor) enters the junction, else its start
   std::vector<int> driving_lanes;  // lane ids crossed
   // Kerb to kerb: the centres of the innermost sidewalk lanes on both sides of the road
   // end (positive lane id side first), moved `setback` metres into the junction, or less

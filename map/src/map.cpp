@@ -204,18 +204,32 @@ Waypoint Map::MakeWaypoint(int road, int section, int lane, double s) const {
 }
 
 std::vector<Waypoint> Map::Walk(const Waypoint& wp, double distance, bool forward, int* budget) const {
-  const int id = NodeOf(wp);
-  // The budget bounds the branching walk on pathological graphs (zero-length loops).
-  if (id < 0 || --*budget < 0 || !(distance >= 0)) return {};
-  const LaneNode& n = nodes_[static_cast<std::size_t>(id)];
-  const double sign = ((n.lane < 0) == forward) ? 1.0 : -1.0;
-  const double room = sign > 0 ? n.s_end - wp.s : wp.s - n.s_begin;
-  if (distance <= room + 1e-9) return {MakeWaypoint(n.road, n.section, n.lane, wp.s + sign * distance)};
+  // Depth first over the branches, in successor order, with a stack of our own: a chain of
+  // thousands of tiny lanes (a hostile map) must not overflow the call stack. The budget
+  // bounds the branching walk on pathological graphs (zero-length loops).
+  struct Pending {
+    Waypoint at;
+    double distance;
+  };
   std::vector<Waypoint> out;
-  for (int next : forward ? n.successors : n.predecessors) {
-    const LaneNode& m = nodes_[static_cast<std::size_t>(next)];
-    const Waypoint entry = MakeWaypoint(m.road, m.section, m.lane, forward ? m.EntryS() : m.ExitS());
-    for (Waypoint& w : Walk(entry, distance - std::max(0.0, room), forward, budget)) out.push_back(w);
+  std::vector<Pending> stack{{wp, distance}};
+  while (!stack.empty()) {
+    const Pending p = std::move(stack.back());
+    stack.pop_back();
+    const int id = NodeOf(p.at);
+    if (id < 0 || --*budget < 0 || !(p.distance >= 0)) continue;
+    const LaneNode& n = nodes_[static_cast<std::size_t>(id)];
+    const double sign = ((n.lane < 0) == forward) ? 1.0 : -1.0;
+    const double room = sign > 0 ? n.s_end - p.at.s : p.at.s - n.s_begin;
+    if (p.distance <= room + 1e-9) {
+      out.push_back(MakeWaypoint(n.road, n.section, n.lane, p.at.s + sign * p.distance));
+      continue;
+    }
+    const std::vector<int>& next = forward ? n.successors : n.predecessors;
+    for (auto it = next.rbegin(); it != next.rend(); ++it) {  // reversed: the first successor is walked first
+      const LaneNode& m = nodes_[static_cast<std::size_t>(*it)];
+      stack.push_back({MakeWaypoint(m.road, m.section, m.lane, forward ? m.EntryS() : m.ExitS()), p.distance - std::max(0.0, room)});
+    }
   }
   return out;
 }

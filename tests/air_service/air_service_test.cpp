@@ -377,7 +377,8 @@ TEST(AirServiceTown, DroneHitsABuildingOfTheMapPublishedOverDds) {
     d.target().z(b.z + 3);
   });
   tick(200);
-  ASSERT_TRUE(obs.WaitUntil([&] { std::lock_guard<std::mutex> lock(mu); return last && last->stamp().frame() == 300; }, 10s));
+  // AirState and PhysicsEvents of a frame are two writers: wait for both of frame 300.
+  ASSERT_TRUE(obs.WaitUntil([&] { std::lock_guard<std::mutex> lock(mu); return last && last->stamp().frame() == 300 && physics.count(300); }, 10s));
   std::lock_guard<std::mutex> lock(mu);
   const auto& d = last->drones().at(0);
   EXPECT_TRUE(d.collision().has_collided());

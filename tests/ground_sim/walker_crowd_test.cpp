@@ -11,14 +11,16 @@
 #include "lockstep/ground/blueprints.h"
 #include "lockstep/ground/world.h"
 #include "test_towns.h"
+#include "walker_test_helpers.h"
 
 namespace lockstep::ground {
 namespace {
 
+using testing::AwayFrom;
+using testing::Flat;
+
 constexpr double kDt = 0.05;
 constexpr double kTolerance = 1e-6;
-
-double Flat(const Vec3& a, const Vec3& b) { return (a - b).head<2>().norm(); }
 
 // The smallest room between two walkers' capsules: centre distance minus the sum of
 // their radii (< 0: they overlap).
@@ -43,20 +45,6 @@ void OpenGround(const Town& town, Vec3* at, Vec3* dir) {
   *dir = wp->transform.Forward();
   dir->z() = 0;
   dir->normalize();
-}
-
-// `hops` sidewalk edges from `node`, each to the neighbour farthest from `from`.
-int AwayFrom(const WalkerGraph& g, int node, const Vec3& from, int hops) {
-  for (int h = 0; h < hops; ++h) {
-    int best = -1;
-    double best_d = Flat(g.Position(node), from);
-    for (const auto& e : g.Edges(node)) {
-      if (e.crossing < 0 && Flat(g.Position(e.to), from) > best_d) best = e.to, best_d = Flat(g.Position(e.to), from);
-    }
-    if (best < 0) break;
-    node = best;
-  }
-  return node;
 }
 
 // Two walkers walking straight at each other (head on, and 0.2 m off): frame by frame

@@ -12,32 +12,20 @@
 
 #include "lockstep/ground/world.h"
 #include "test_towns.h"
+#include "walker_test_helpers.h"
 
 namespace lockstep::ground {
 namespace {
 
-constexpr double kDt = 0.05;
+using testing::AwayFrom;
+using testing::Flat;
 
-double Flat(const Vec3& a, const Vec3& b) { return (a - b).head<2>().norm(); }
+constexpr double kDt = 0.05;
 
 double SegmentDistance(const Vec3& p, const Vec3& a, const Vec3& b) {
   const Eigen::Vector2d ab = (b - a).head<2>();
   const double t = std::clamp((p - a).head<2>().dot(ab) / ab.squaredNorm(), 0.0, 1.0);
   return ((a + (b - a) * t) - p).head<2>().norm();
-}
-
-// `hops` sidewalk edges from `node`, each to the neighbour farthest from `from`.
-int AwayFrom(const WalkerGraph& g, int node, const Vec3& from, int hops) {
-  for (int h = 0; h < hops; ++h) {
-    int best = -1;
-    double best_d = Flat(g.Position(node), from);
-    for (const auto& e : g.Edges(node)) {
-      if (e.crossing < 0 && Flat(g.Position(e.to), from) > best_d) best = e.to, best_d = Flat(g.Position(e.to), from);
-    }
-    if (best < 0) break;
-    node = best;
-  }
-  return node;
 }
 
 // A junction-mouth crossing of Town01 with a traffic light, sidewalk reaching both kerbs.

@@ -14,6 +14,16 @@ bool OnDrivingLane(const Map& m, const Eigen::Vector3d& p) {
 
 std::vector<MouthCrossing> JunctionMouthCrossings(const Map& m, double setback) {
   using Vec3 = Eigen::Vector3d;
+  // A mouth that already has a crosswalk object of the map (the generated towns put one
+  // about 5 m before the stop line) gets no second crossing.
+  constexpr double kObjectNearby = 10.0;  // m, object centre to the derived crossing's centre
+  std::vector<Vec3> objects;
+  for (const auto& poly : m.Crosswalks()) {
+    if (poly.empty()) continue;
+    Vec3 c = Vec3::Zero();
+    for (const Vec3& p : poly) c += p;
+    objects.push_back(c / static_cast<double>(poly.size()));
+  }
   std::vector<MouthCrossing> out;
   const auto& roads = m.Data().roads;
   for (size_t r = 0; r < roads.size(); ++r) {
@@ -51,7 +61,10 @@ std::vector<MouthCrossing> JunctionMouthCrossings(const Map& m, double setback) 
           break;
         }
       }
-      if (ok) out.push_back(std::move(c));
+      if (!ok) continue;
+      const Vec3 centre = (c.ends[0] + c.ends[1]) / 2;
+      const bool has_object = std::any_of(objects.begin(), objects.end(), [&](const Vec3& o) { return (o - centre).head<2>().norm() < kObjectNearby; });
+      if (!has_object) out.push_back(std::move(c));
     }
   }
   return out;

@@ -161,6 +161,26 @@ TEST(map_meshes, JunctionMouthsOfTown01HaveZebraCrossings) {
   EXPECT_GE(at_two_metres, mouths.size() * 3 / 4);
 }
 
+// The generated towns have crosswalk objects before their signalled junctions: those mouths
+// keep the object's crossing and get no second one; the others get one.
+TEST(map_meshes, AMouthWithACrosswalkObjectGetsNoSecondCrossing) {
+  const GeneratedTown t = GenerateTown(TownKind::Town1, 3);
+  const Map m = Map::FromString(t.xodr, t.name);
+  const auto objects = m.Crosswalks();
+  ASSERT_GE(objects.size(), 40u);
+  const std::vector<MouthCrossing> mouths = JunctionMouthCrossings(m);
+  EXPECT_GE(mouths.size(), 4u) << "mouths without an object still get a crossing";
+  for (const MouthCrossing& c : mouths) {
+    const Eigen::Vector3d centre = (c.ends[0] + c.ends[1]) / 2;
+    for (const auto& poly : objects) {
+      Eigen::Vector3d o = Eigen::Vector3d::Zero();
+      for (const auto& p : poly) o += p;
+      o /= static_cast<double>(poly.size());
+      EXPECT_GT((o - centre).head<2>().norm(), 10.0) << "a second crossing next to a crosswalk object, road index " << c.road;
+    }
+  }
+}
+
 TEST(map_meshes, WorldTriangleBudgetAndUniqueInstances) {
   for (TownKind kind : {TownKind::Town1, TownKind::Town2}) {
     const GeneratedTown t = GenerateTown(kind, 3);

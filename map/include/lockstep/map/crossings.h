@@ -23,8 +23,8 @@ struct MouthCrossing {
   Eigen::Vector3d into_junction = Eigen::Vector3d::UnitX();  // horizontal unit vector
 };
 
-// One per road end that enters a junction and has a sidewalk on both sides, in road order
-// (start before end).
+// One per road end that enters a junction and has a sidewalk on both sides and no crosswalk
+// object of the map within 10 m, in road order (start before end).
 std::vector<MouthCrossing> JunctionMouthCrossings(const Map& m, double setback = 2.0);
 
 // Whether the horizontal point stands on a driving lane of the map (junctions included).

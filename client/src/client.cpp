@@ -449,8 +449,11 @@ struct Client::Impl {
     return out;
   }
 
+  // A destroyed actor, with its children (the coordinator destroys them with it). A
+  // destroyed sensor delivers no more data: a tick() stops waiting for it.
   void RemoveActor(uint32_t id) {
     actors.erase(id);
+    listeners.erase(id);
     removed.insert({actors_run, id});
     {
       auto& shared = Shared();
@@ -690,7 +693,7 @@ struct Client::Impl {
     auto late = [&] {
       std::vector<uint32_t> out;
       for (const auto& [id, l] : listeners) {
-        if (!l.per_frame || pk == 0) continue;
+        if (!l.per_frame || pk == 0 || l.start.first != run) continue;  // a sensor of an earlier run is gone
         const RunFrame want{run, pk};
         if (want <= l.start) continue;  // spawned or listened after that frame
         if (l.delivered < want) out.push_back(id);
@@ -985,7 +988,6 @@ void Client::destroy(uint32_t actor) {
   Submit(std::move(b));
   std::lock_guard<std::mutex> lock(impl_->mu);
   impl_->RemoveActor(actor);
-  impl_->listeners.erase(actor);
 }
 
 BlueprintLibrary Client::blueprints(double wait_s) const {

@@ -318,5 +318,29 @@ TEST_F(ClientTest, ALateSensorIsNamedAndItsDataStillArrivesOnce) {
   EXPECT_FALSE(client_->is_listening(good));
 }
 
+TEST_F(ClientTest, ASensorDestroyedWithItsParentIsNoLongerAwaitedByTick) {
+  Start(true, /*skip_frame=*/0, /*sensor_timeout=*/0.5);
+  const uint32_t drone = client_->spawn("drone.generic_quad", MakePose(47.75, 1.75, 0));
+  const uint32_t imu = client_->spawn("sensor.other.imu", MakePose(0, 0, 0.2), {}, drone);
+  std::atomic<int> count{0};
+  client_->listen(imu, [&](const SensorSample&) { ++count; });
+  for (int i = 0; i < 3; ++i) client_->tick();
+  EXPECT_GE(count.load(), 2);
+  client_->destroy(drone);  // the IMU goes with it
+  EXPECT_FALSE(client_->is_listening(imu));
+  for (int i = 0; i < 3; ++i) EXPECT_NO_THROW(client_->tick());
+}
+
+TEST_F(ClientTest, ASensorOfAnEarlierRunIsNoLongerAwaitedByTick) {
+  Start(true, /*skip_frame=*/0, /*sensor_timeout=*/0.5);
+  const uint32_t imu = client_->spawn("sensor.other.imu", MakePose(0, 0, 1));
+  std::atomic<int> count{0};
+  client_->listen(imu, [&](const SensorSample&) { ++count; });
+  for (int i = 0; i < 3; ++i) client_->tick();
+  EXPECT_GE(count.load(), 2);
+  client_->reset(7);  // a new run: the IMU is gone
+  for (int i = 0; i < 3; ++i) EXPECT_NO_THROW(client_->tick());
+}
+
 }  // namespace
 }  // namespace lockstep::client

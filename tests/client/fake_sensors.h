@@ -38,14 +38,22 @@ class FakeSensors final : public ServiceCore {
         if (bp != "sensor.other.imu" && bp != "sensor.camera.rgb") continue;
         bool late = false;
         for (const auto& a : s.attributes()) late |= a.key().to_string() == "role_name" && a.value().to_string() == "late";
-        sensors_[s.actor()] = {bp == "sensor.camera.rgb", late};
+        sensors_[s.actor()] = {bp == "sensor.camera.rgb", late, s.parent()};
         if (bp == "sensor.camera.rgb") {  // a topic per camera, as the render service
           const std::string topic = topics::ImageTopicName(s.actor());
           images_[s.actor()] = Writer<msg::Image>(bus_, Topic<msg::Image>{topic.c_str(), QosKind::kImage});
         }
       } else if (b._d() == msg::CommandKind::CMD_DESTROY_ACTOR) {
-        sensors_.erase(b.destroy_actor().actor());
-        images_.erase(b.destroy_actor().actor());
+        // As the coordinator does: a sensor goes with the actor it is attached to.
+        const uint32_t doomed = b.destroy_actor().actor();
+        for (auto it = sensors_.begin(); it != sensors_.end();) {
+          if (it->first == doomed || it->second.parent == doomed) {
+            images_.erase(it->first);
+            it = sensors_.erase(it);
+          } else {
+            ++it;
+          }
+        }
       }
     }
     if (replaying()) return;
@@ -79,6 +87,7 @@ class FakeSensors final : public ServiceCore {
   struct Sensor {
     bool camera = false;
     bool late = false;
+    uint32_t parent = 0;
   };
   Bus& bus_;
   std::string name_;

@@ -5,6 +5,7 @@ import math
 import os
 import threading
 import time
+import weakref
 import zlib
 import struct
 
@@ -83,17 +84,19 @@ def _quat_yaw_pitch(yaw, pitch):
 
 class _AttachedSensors:
     """Sensors AirSim declares in settings.json are spawned here on first use, attached to
-    the drone, and listened to; each get*Data returns the newest sample."""
+    the drone, and listened to; each get*Data returns the newest sample. One set per DDS
+    session (every MultirotorClient of a process shares it): a drone's IMU is spawned once,
+    lives as long as the drone, and goes with it (or with the run)."""
 
     def __init__(self, client):
-        self._client = client
+        self._client_ref = weakref.ref(client)   # the session holds the listeners, not the other way
         self._sensors = {}  # (vehicle actor, blueprint, name) -> [actor id, latest sample]
         self._lock = threading.Lock()
         self._cv = threading.Condition(self._lock)
 
     def latest(self, call, actor, blueprint, name, attributes=None, pose=(0, 0, 0, 1, 0, 0, 0)):
         key = (actor, blueprint, name)
-        c = self._client
+        c = self._client_ref()
         if key not in self._sensors:
             declared = {d['id'] for d in c.blueprints(1.0)}
             if blueprint not in declared:
@@ -125,12 +128,26 @@ class _AttachedSensors:
                 raise lockstep.ClientError('%s: sensor %s (%s) delivered no data within 10 s' % (call, slot[0], blueprint))
 
 
+_attached = weakref.WeakKeyDictionary()   # session (lockstep.Client) -> its (run, _AttachedSensors)
+_attached_lock = threading.Lock()
+
+
+def _attached_sensors(client):
+    """The session's attached sensors of its current run (a reset starts a new set)."""
+    run = client.world_info()['run']
+    with _attached_lock:
+        entry = _attached.get(client)
+        if entry is None or entry[0] != run:
+            entry = (run, _AttachedSensors(client))
+            _attached[client] = entry
+        return entry[1]
+
+
 class MultirotorClient:
     def __init__(self, ip='', port=41451, timeout_value=3600):
         self._ip, self._port = ip, port
-        self._client = lockstep.Client(timeout=float(os.environ.get('LOCKSTEP_CONNECT_TIMEOUT', '10')))
+        self._client = lockstep.session(timeout=float(os.environ.get('LOCKSTEP_CONNECT_TIMEOUT', '10')))
         self._mc = lockstep.Multirotor(self._client)
-        self._sensors = _AttachedSensors(self._client)
         self._paused_from = None   # settings before simPause(True)
         self._weather = {}
 
@@ -212,7 +229,6 @@ class MultirotorClient:
 
     def reset(self):
         self._client.reset(0)
-        self._sensors = _AttachedSensors(self._client)
 
     def enableApiControl(self, is_enabled, vehicle_name=''):
         self._drone(vehicle_name)
@@ -447,7 +463,7 @@ class MultirotorClient:
 
     # --- sensors (spawned on first use, attached to the drone) ---
     def getImuData(self, imu_name='', vehicle_name=''):
-        s = self._sensors.latest('getImuData', self._drone(vehicle_name), 'sensor.other.imu', imu_name)
+        s = _attached_sensors(self._client).latest('getImuData', self._drone(vehicle_name), 'sensor.other.imu', imu_name)
         f = s.fields()
         out = ImuData()
         out.time_stamp = int(s.sim_time * 1e9)
@@ -473,7 +489,7 @@ class MultirotorClient:
         return Quaternionr(r[1], r[2], r[3], r[0])
 
     def getGpsData(self, gps_name='', vehicle_name=''):
-        s = self._sensors.latest('getGpsData', self._drone(vehicle_name), 'sensor.other.gnss', gps_name)
+        s = _attached_sensors(self._client).latest('getGpsData', self._drone(vehicle_name), 'sensor.other.gnss', gps_name)
         f = s.fields()
         out = GpsData()
         out.time_stamp = int(s.sim_time * 1e9)
@@ -484,7 +500,7 @@ class MultirotorClient:
         return out
 
     def getBarometerData(self, barometer_name='', vehicle_name=''):
-        s = self._sensors.latest('getBarometerData', self._drone(vehicle_name), 'sensor.other.barometer', barometer_name)
+        s = _attached_sensors(self._client).latest('getBarometerData', self._drone(vehicle_name), 'sensor.other.barometer', barometer_name)
         f = s.fields()
         out = BarometerData()
         out.time_stamp = int(s.sim_time * 1e9)
@@ -492,7 +508,7 @@ class MultirotorClient:
         return out
 
     def getMagnetometerData(self, magnetometer_name='', vehicle_name=''):
-        s = self._sensors.latest('getMagnetometerData', self._drone(vehicle_name), 'sensor.other.magnetometer',
+        s = _attached_sensors(self._client).latest('getMagnetometerData', self._drone(vehicle_name), 'sensor.other.magnetometer',
                                  magnetometer_name)
         m = s.fields()['magnetic_field']
         out = MagnetometerData()
@@ -501,7 +517,7 @@ class MultirotorClient:
         return out
 
     def getDistanceSensorData(self, distance_sensor_name='', vehicle_name=''):
-        s = self._sensors.latest('getDistanceSensorData', self._drone(vehicle_name), 'sensor.other.distance',
+        s = _attached_sensors(self._client).latest('getDistanceSensorData', self._drone(vehicle_name), 'sensor.other.distance',
                                  distance_sensor_name)
         f = s.fields()
         out = DistanceSensorData()
@@ -510,7 +526,7 @@ class MultirotorClient:
         return out
 
     def getLidarData(self, lidar_name='', vehicle_name=''):
-        s = self._sensors.latest('getLidarData', self._drone(vehicle_name), 'sensor.lidar.ray_cast', lidar_name)
+        s = _attached_sensors(self._client).latest('getLidarData', self._drone(vehicle_name), 'sensor.lidar.ray_cast', lidar_name)
         pts = np.array(s.array(), dtype=np.float32)[:, :3]
         pts[:, 1] *= -1   # FLU -> FRD
         pts[:, 2] *= -1
@@ -534,7 +550,7 @@ class MultirotorClient:
             (x, y, z), pitch = mount
             pose = (x, y, z) + _quat_yaw_pitch(math.radians(180) if pitch == 180 else 0.0,
                                                -math.radians(pitch) if pitch != 180 else 0.0)
-            s = self._sensors.latest('simGetImages', actor, bp, 'camera_%s_%d' % (r.camera_name, r.image_type),
+            s = _attached_sensors(self._client).latest('simGetImages', actor, bp, 'camera_%s_%d' % (r.camera_name, r.image_type),
                                      {'image_size_x': '256', 'image_size_y': '144', 'fov': '90'}, pose)
             out.append(self._image_response(s, r))
         return out

@@ -171,7 +171,7 @@ class Client:
 
     def _client(self):
         if self._native is None:
-            self._native = lockstep.Client(timeout=self._timeout)
+            self._native = lockstep.session(timeout=self._timeout)
         return self._native
 
     def set_timeout(self, seconds):

@@ -16,8 +16,13 @@
 //      (this process, not required, joined only now) publishing a 1280x720 BGRA image
 //      per tick, the delay from the camera's write to a numpy view in a listen callback
 //      (the coordinator logs that the camera diverged: a newcomer without the run's past).
+//   4. The empty world: a second simulation on the same DDS domain with the services of
+//      the main job (air_sim, ground_sim, sensors, render; those built) as required
+//      processes, the generated town, no actors. The C++ and the Python client process tick
+//      it in interleaved blocks as in step 2, against the barrier of those services.
 // Prints JSON lines; the last is the summary, whose python_to_barrier is exactly
-// tick_roundtrip_us_python / barrier_median_us as printed.
+// tick_roundtrip_us_python / barrier_median_us as printed (python_to_barrier_empty_world
+// likewise for step 4).
 // `bench_client --child DOMAIN` is the C++ client process of step 2.
 #include <sys/wait.h>
 #include <unistd.h>
@@ -26,10 +31,12 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <memory>
 #include <string>
 #include <thread>
@@ -41,6 +48,8 @@
 #include "lockstep/coordinator/coordinator.h"
 #include "lockstep/runtime/domain_lock.h"
 #include "lockstep/runtime/log.h"
+
+#include <spdlog/sinks/stdout_color_sinks.h>
 
 namespace {
 
@@ -131,11 +140,80 @@ void Block(ChildProcess& child, int n, const lockstep::Coordinator& coordinator,
   into->barrier_us.insert(into->barrier_us.end(), all.begin() + static_cast<long>(std::min(before, all.size())), all.end());
 }
 
+// The C++ and the Python client process tick in interleaved blocks of kBlock (after 100
+// warm-up ticks each), `rounds` each, alternating which goes first and ending with Python.
+// `after_python_last` runs with the last Python process still alive (step 3).
+void InterleavedClients(int rounds, const std::string& dom, const lockstep::Coordinator& coordinator, Series* cpp, Series* py,
+                        const std::function<void(ChildProcess&)>& after_python_last = {}) {
+  for (int b = 0; b < 2 * rounds; ++b) {
+    const bool cpp_first = (rounds - 1 - b / 2) % 2 == 0;
+    const bool python = cpp_first == (b % 2 == 1);
+    ChildProcess child(python ? std::vector<std::string>{"/usr/bin/python3", LOCKSTEP_BENCH_SCRIPT}
+                              : std::vector<std::string>{BinDir() + "/bench_client", "--child", dom});
+    if (child.ReadLine() != "ready") throw std::runtime_error("a client did not start");
+    Block(child, 100, coordinator, nullptr);  // warm-up
+    Block(child, kBlock, coordinator, python ? py : cpp);
+    if (python && b == 2 * rounds - 1 && after_python_last) after_python_last(child);
+    if (child.Wait() != 0) throw std::runtime_error(python ? "the Python client failed" : "a client process failed");
+  }
+}
+
+struct EmptyWorld {
+  std::string services;  // comma-separated
+  Series cpp, py;
+};
+
+// Step 4: the services of the main job, each a process, required; no actors.
+EmptyWorld RunEmptyWorld(int domain, int rounds) {
+  const std::string dom = std::to_string(domain);
+  const auto dir = std::filesystem::temp_directory_path() / ("lockstep-bench-client-" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string file = (dir / "empty_world.yaml").string();
+  EmptyWorld out;
+  std::vector<std::pair<std::string, bool>> kinds;  // (kind, perception)
+  for (const auto& [kind, perception] : {std::pair{"air_sim", false}, {"ground_sim", false}, {"sensors", true}, {"render", true}}) {
+    if (std::filesystem::exists(BinDir() + "/lockstep_" + kind)) kinds.emplace_back(kind, perception);
+  }
+  {
+    std::ofstream f(file);
+    f << "name: bench_empty_world\ndomain_id: " << domain << "\nseed: 1\nmap: " << LOCKSTEP_BENCH_TOWN
+      << "\nworld: {synchronous_mode: true, fixed_delta_seconds: 0.05, service_timeout: 60}\nservices:\n";
+    for (const auto& [kind, perception] : kinds) {
+      f << "  - {name: " << kind << ", kind: " << kind << ", perception: " << (perception ? "true" : "false") << "}\n";
+      out.services += (out.services.empty() ? "" : ",") + kind;
+    }
+  }
+  std::vector<pid_t> pids;
+  for (const auto& [kind, perception] : kinds) {
+    pids.push_back(Spawn({BinDir() + "/lockstep_" + kind, "--name", kind, "--config", file, "--domain", dom}));
+  }
+  std::atomic<bool> stop{false};
+  std::exception_ptr failure;
+  {
+    auto bus = lockstep::CreateDdsBus({domain, "", "lockstep.participant", "bench-coordinator-empty-world"});
+    lockstep::Coordinator coordinator(*bus, lockstep::LoadLaunchConfig(file));
+    std::thread run([&] { coordinator.Run(stop); });
+    try {
+      InterleavedClients(rounds, dom, coordinator, &out.cpp, &out.py);
+    } catch (...) {
+      failure = std::current_exception();
+    }
+    stop = true;
+    run.join();
+  }
+  for (pid_t p : pids) kill(p, SIGTERM);
+  for (pid_t p : pids) waitpid(p, nullptr, 0);
+  std::filesystem::remove_all(dir);
+  if (failure) std::rethrow_exception(failure);
+  return out;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   if (argc > 2 && std::strcmp(argv[1], "--child") == 0) return RunChild(std::atoi(argv[2]));
   setenv("LOCKSTEP_LOG", "warn", 0);
+  spdlog::set_default_logger(spdlog::stderr_color_mt("bench"));  // stdout carries the JSON lines only
   lockstep::InitLogging("bench");
   const int ticks = std::max(kBlock, argc > 1 ? std::atoi(argv[1]) / kBlock * kBlock : 2000);
   const int domain = lockstep::LockFreeDdsDomain();  // none shared with tests or other benchmarks running now
@@ -153,7 +231,8 @@ int main(int argc, char** argv) {
   const pid_t noop = Spawn({BinDir() + "/lockstep_noop", "--name", "noop", "--domain", dom});
 
   auto coordinator_bus = lockstep::CreateDdsBus({domain, "", "lockstep.participant", "bench-coordinator"});
-  lockstep::Coordinator coordinator(*coordinator_bus, config);
+  auto coordinator_owner = std::make_unique<lockstep::Coordinator>(*coordinator_bus, config);
+  lockstep::Coordinator& coordinator = *coordinator_owner;
   std::atomic<bool> stop{false};
   std::thread coordinator_thread([&] { coordinator.Run(stop); });
   std::unique_ptr<lockstep::Bus> camera_bus;
@@ -197,20 +276,7 @@ int main(int argc, char** argv) {
   Series cpp, py;
   std::string py_summary;
   try {
-    const int rounds = ticks / kBlock;
-    for (int b = 0; b < 2 * rounds; ++b) {
-      // Rounds alternate C++ first and Python first, the last one Python last: ..., C++ Python.
-      const bool cpp_first = (rounds - 1 - b / 2) % 2 == 0;
-      const bool python = cpp_first == (b % 2 == 1);
-      ChildProcess child(python ? std::vector<std::string>{"/usr/bin/python3", LOCKSTEP_BENCH_SCRIPT}
-                                : std::vector<std::string>{BinDir() + "/bench_client", "--child", dom});
-      if (child.ReadLine() != "ready") throw std::runtime_error("a client did not start");
-      Block(child, 100, coordinator, nullptr);  // warm-up
-      Block(child, kBlock, coordinator, python ? &py : &cpp);
-      if (!python || py.tick_us.size() < static_cast<size_t>(ticks)) {
-        if (child.Wait() != 0) throw std::runtime_error("a client process failed");
-        continue;
-      }
+    InterleavedClients(ticks / kBlock, dom, coordinator, &cpp, &py, [&](ChildProcess& child) {
       // 3. The camera joins (not required: the barrier still waits for the no-op only).
       camera_bus = lockstep::CreateDdsBus({domain, "", "lockstep.participant", "bench-camera"});
       camera_core = std::make_unique<lockstep::bench::BenchCamera>(*camera_bus);
@@ -218,13 +284,35 @@ int main(int argc, char** argv) {
                                                          *camera_core);
       camera_thread = std::thread([&] { camera->Run(stop); });
       py_summary = child.Ask("rest");
-      if (child.Wait() != 0) throw std::runtime_error("the Python client failed");
-    }
+    });
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_client: %s\n", e.what());
     return finish(1);
   }
   finish(0);
+  // Step 1-3's participants leave the domain before the empty world starts on it.
+  camera.reset();
+  camera_core.reset();
+  camera_bus.reset();
+  coordinator_owner.reset();
+  coordinator_bus.reset();
+
+  // 4. The empty world.
+  EmptyWorld empty;
+  try {
+    empty = RunEmptyWorld(domain, std::max(1, ticks / kBlock / 2));
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_client: the empty world: %s\n", e.what());
+    return 1;
+  }
+  const double ew_py = Round1(Median(empty.py.tick_us)), ew_py_barrier = Round1(Median(empty.py.barrier_us));
+  const double ew_cpp = Round1(Median(empty.cpp.tick_us)), ew_cpp_barrier = Round1(Median(empty.cpp.barrier_us));
+  const double ew_ratio = ew_py_barrier > 0 ? ew_py / ew_py_barrier : 0.0;
+  std::printf("{\"bench\":\"client_tick_empty_world\",\"services\":\"%s\",\"ticks\":%zu,\"tick_roundtrip_us_python\":%.1f,"
+              "\"barrier_median_us\":%.1f,\"python_to_barrier\":%.2f,\"tick_roundtrip_us_cpp\":%.1f,"
+              "\"barrier_median_us_during_cpp\":%.1f,\"cpp_to_barrier\":%.2f}\n",
+              empty.services.c_str(), empty.py.tick_us.size(), ew_py, ew_py_barrier, ew_ratio, ew_cpp, ew_cpp_barrier,
+              ew_cpp_barrier > 0 ? ew_cpp / ew_cpp_barrier : 0.0);
 
   // The Python process prints {"waypoint_us":..,"image_ms":..,"images":..}.
   auto value = [&](const char* key) {
@@ -244,8 +332,8 @@ int main(int argc, char** argv) {
   std::printf("{\"bench\":\"client\",\"tick_roundtrip_us_cpp\":%.1f,\"tick_roundtrip_us_python\":%.1f,\"get_waypoint_us_python\":%.2f,"
               "\"image_720p_to_numpy_ms\":%.3f,\"barrier_median_us\":%.1f,\"python_to_barrier\":%.2f,"
               "\"barrier_median_us_during_cpp\":%.1f,\"cpp_to_barrier\":%.2f,\"tick_roundtrip_us_cpp_in_process\":%.1f,"
-              "\"load_avg_1m\":[%.2f,%.2f]}\n",
+              "\"python_to_barrier_empty_world\":%.2f,\"load_avg_1m\":[%.2f,%.2f]}\n",
               cpp_us, py_us, waypoint_us, image_ms, py_barrier, py_barrier > 0 ? py_us / py_barrier : 0.0, cpp_barrier,
-              cpp_barrier > 0 ? cpp_us / cpp_barrier : 0.0, in_us, load_start, LoadAverage());
+              cpp_barrier > 0 ? cpp_us / cpp_barrier : 0.0, in_us, ew_ratio, load_start, LoadAverage());
   return 0;
 }

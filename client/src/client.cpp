@@ -679,11 +679,16 @@ struct Client::Impl {
   // After frame k of `run` completed: the ground / air state of k (from the services
   // that publish one), then every listened per-frame sensor's data of its frame.
   void AwaitFrameOutputs(uint32_t run, uint64_t k) {
-    std::unique_lock<std::mutex> lock(mu);
     // A state topic counts when its writer is matched, or (right after connecting, before
     // discovery finished) when a member of the run is the service kind that publishes it.
-    const bool has_ground = ground_reader.MatchedWriters() > 0 || MemberOfKind("ground_sim");
-    const bool has_air = air_reader.MatchedWriters() > 0 || MemberOfKind("air_sim");
+    // The matched counts are read before taking `mu`: Fast DDS holds a reader's lock while
+    // it calls our callback, which takes `mu` (asking under `mu` deadlocked against an
+    // AirState arriving at that moment).
+    const bool ground_matched = ground_reader.MatchedWriters() > 0;
+    const bool air_matched = air_reader.MatchedWriters() > 0;
+    std::unique_lock<std::mutex> lock(mu);
+    const bool has_ground = ground_matched || MemberOfKind("ground_sim");
+    const bool has_air = air_matched || MemberOfKind("air_sim");
     const auto state_deadline = Deadline(options.state_timeout_s);
     WaitOn(frame_cv, lock, state_deadline, [&] {
       return (!has_ground || ground.count({run, k})) && (!has_air || air.count({run, k}));

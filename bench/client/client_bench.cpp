@@ -20,6 +20,10 @@
 //      the main job (air_sim, ground_sim, sensors, render; those built) as required
 //      processes, the generated town, no actors. The C++ and the Python client process tick
 //      it in interleaved blocks as in step 2, against the barrier of those services.
+//   5. The coordinator in the Python process: a third simulation on the domain, with one
+//      no-op service process, whose coordinator the Python process hosts
+//      (lockstep.Coordinator, as a script started with `lockstep up --no-coordinator`
+//      would); its world.tick() against that coordinator's barrier.
 // Prints JSON lines; the last is the summary, whose python_to_barrier is exactly
 // tick_roundtrip_us_python / barrier_median_us as printed (python_to_barrier_empty_world
 // likewise for step 4).
@@ -208,6 +212,36 @@ EmptyWorld RunEmptyWorld(int domain, int rounds) {
   return out;
 }
 
+// Step 5: the Python process hosts the coordinator (lockstep.Coordinator) of a run with
+// one no-op service process; its answer is {"tick_us":..,"barrier_us":..,...}.
+std::string RunEmbedded(int domain, int ticks) {
+  const std::string dom = std::to_string(domain);
+  const auto dir = std::filesystem::temp_directory_path() / ("lockstep-bench-client-embedded-" + std::to_string(getpid()));
+  std::filesystem::create_directories(dir);
+  const std::string file = (dir / "embedded.yaml").string();
+  {
+    std::ofstream f(file);
+    f << "name: bench_embedded\ndomain_id: " << domain << "\nseed: 1\nmap: " << LOCKSTEP_BENCH_TOWN
+      << "\nworld: {synchronous_mode: true, fixed_delta_seconds: 0.05, service_timeout: 30}\n"
+         "services:\n  - {name: noop, kind: noop}\n";
+  }
+  const pid_t noop = Spawn({BinDir() + "/lockstep_noop", "--name", "noop", "--config", file, "--domain", dom});
+  std::string answer;
+  std::exception_ptr failure;
+  try {
+    ChildProcess python({"/usr/bin/python3", LOCKSTEP_BENCH_SCRIPT, "--embedded", file, std::to_string(ticks)});
+    answer = python.ReadLine();
+    if (python.Wait() != 0) throw std::runtime_error("the Python process hosting the coordinator failed");
+  } catch (...) {
+    failure = std::current_exception();
+  }
+  kill(noop, SIGTERM);
+  waitpid(noop, nullptr, 0);
+  std::filesystem::remove_all(dir);
+  if (failure) std::rethrow_exception(failure);
+  return answer;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -305,6 +339,24 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "bench_client: the empty world: %s\n", e.what());
     return 1;
   }
+  // 5. The coordinator in the Python process.
+  std::string embedded;
+  try {
+    embedded = RunEmbedded(domain, ticks / 2);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "bench_client: the embedded coordinator: %s\n", e.what());
+    return 1;
+  }
+  auto field = [](const std::string& json, const char* key) {
+    const auto at = json.find(std::string("\"") + key + "\":");
+    return at == std::string::npos ? -1.0 : std::atof(json.c_str() + at + std::strlen(key) + 3);
+  };
+  const double em_py = Round1(field(embedded, "tick_us")), em_barrier = Round1(field(embedded, "barrier_us"));
+  const double em_ratio = em_barrier > 0 ? em_py / em_barrier : 0.0;
+  std::printf("{\"bench\":\"client_tick_embedded_coordinator\",\"ticks\":%.0f,\"tick_roundtrip_us_python\":%.1f,"
+              "\"barrier_median_us\":%.1f,\"python_to_barrier\":%.2f}\n",
+              field(embedded, "ticks"), em_py, em_barrier, em_ratio);
+
   const double ew_py = Round1(Median(empty.py.tick_us)), ew_py_barrier = Round1(Median(empty.py.barrier_us));
   const double ew_cpp = Round1(Median(empty.cpp.tick_us)), ew_cpp_barrier = Round1(Median(empty.cpp.barrier_us));
   const double ew_ratio = ew_py_barrier > 0 ? ew_py / ew_py_barrier : 0.0;
@@ -332,8 +384,9 @@ int main(int argc, char** argv) {
   std::printf("{\"bench\":\"client\",\"tick_roundtrip_us_cpp\":%.1f,\"tick_roundtrip_us_python\":%.1f,\"get_waypoint_us_python\":%.2f,"
               "\"image_720p_to_numpy_ms\":%.3f,\"barrier_median_us\":%.1f,\"python_to_barrier\":%.2f,"
               "\"barrier_median_us_during_cpp\":%.1f,\"cpp_to_barrier\":%.2f,\"tick_roundtrip_us_cpp_in_process\":%.1f,"
-              "\"python_to_barrier_empty_world\":%.2f,\"load_avg_1m\":[%.2f,%.2f]}\n",
+              "\"python_to_barrier_empty_world\":%.2f,\"python_to_barrier_embedded_coordinator\":%.2f,"
+              "\"load_avg_1m\":[%.2f,%.2f]}\n",
               cpp_us, py_us, waypoint_us, image_ms, py_barrier, py_barrier > 0 ? py_us / py_barrier : 0.0, cpp_barrier,
-              cpp_barrier > 0 ? cpp_us / cpp_barrier : 0.0, in_us, ew_ratio, load_start, LoadAverage());
+              cpp_barrier > 0 ? cpp_us / cpp_barrier : 0.0, in_us, ew_ratio, em_ratio, load_start, LoadAverage());
   return 0;
 }

@@ -1,4 +1,5 @@
 """The Python client process of bench_client, driven over stdin / stdout:
+  (with --embedded CONFIG TICKS: step 5, see below)
   "tick N"  -> N world.tick() round trips (us) on one line (lockstep.carla, as a script would)
   "rest"    -> get_waypoint (mean us per call), then the delay from a 720p camera image's
                publication to a numpy view of it in a listen callback; one JSON line, exit.
@@ -12,6 +13,7 @@ import time
 answers = os.fdopen(os.dup(1), 'w')
 os.dup2(2, 1)  # the native module's logging must not mix with the answers
 
+import lockstep  # noqa: E402
 import lockstep.carla as carla  # noqa: E402
 from lockstep.carla.map import Map  # noqa: E402
 
@@ -19,6 +21,30 @@ from lockstep.carla.map import Map  # noqa: E402
 def answer(line):
     answers.write(line + '\n')
     answers.flush()
+
+
+if len(sys.argv) == 4 and sys.argv[1] == '--embedded':
+    # Step 5: this process hosts the coordinator of CONFIG (lockstep.Coordinator) and ticks
+    # TICKS times after 100 warm-up ticks; one JSON line with both medians, then exit.
+    config, ticks = sys.argv[2], int(sys.argv[3])
+    with lockstep.Coordinator(config) as coordinator:
+        client = carla.Client('localhost', 2000)
+        client.set_timeout(30)
+        world = client.get_world()
+        client._client().wait_ready(30)
+        for _ in range(100):
+            world.tick()
+        before = len(coordinator.stats()['barrier_us'])
+        rt = []
+        for _ in range(ticks):
+            t0 = time.perf_counter()
+            world.tick()
+            rt.append((time.perf_counter() - t0) * 1e6)
+        barrier = coordinator.stats()['barrier_us'][before:]
+        del world, client
+        answer(json.dumps({'tick_us': statistics.median(rt), 'barrier_us': statistics.median(barrier) if barrier else -1,
+                           'ticks': len(rt), 'barriers': len(barrier)}))
+    sys.exit(0)
 
 
 client = carla.Client('localhost', 2000)

@@ -42,14 +42,18 @@ void SweepShm(bool quiet) {
   std::fflush(stdout);
 }
 
-int Up(const std::string& config_file, int domain) {
+int Up(const std::string& config_file, int domain, bool with_coordinator) {
   SweepShm(true);
   lockstep::LaunchConfig config = lockstep::LoadLaunchConfig(config_file);
   if (domain >= 0) config.domain_id = domain;
   const std::string bin = BinDir();
   const std::string dom = std::to_string(config.domain_id);
   std::vector<lockstep::ChildSpec> children;
-  children.push_back({"coordinator", {bin + "/lockstep_coordinator", config_file, "--domain", dom}, false, true});
+  // Without it, a script hosts the coordinator (lockstep.Coordinator); the services run
+  // until Ctrl-C (or until one of them exits).
+  if (with_coordinator) {
+    children.push_back({"coordinator", {bin + "/lockstep_coordinator", config_file, "--domain", dom}, false, true});
+  }
   for (const auto& s : config.services) {
     std::string exe = s.executable.empty() ? bin + "/lockstep_" + s.kind : s.executable;
     if (exe.find('/') == std::string::npos) exe = bin + "/" + exe;
@@ -60,8 +64,8 @@ int Up(const std::string& config_file, int domain) {
     argv.insert(argv.end(), s.args.begin(), s.args.end());
     children.push_back({s.name, argv, s.restart == "on-failure", false});
   }
-  std::printf("lockstep: starting '%s' on DDS domain %d: coordinator + %zu service(s)\n", config.name.c_str(),
-              config.domain_id, config.services.size());
+  std::printf("lockstep: starting '%s' on DDS domain %d: %s%zu service(s)\n", config.name.c_str(), config.domain_id,
+              with_coordinator ? "coordinator + " : "no coordinator (a script hosts it), ", config.services.size());
   std::fflush(stdout);
   // A member the run reports failed while its process still runs is hung (stopped, or a
   // step stuck while its heartbeat thread goes on): the supervisor replaces it.
@@ -227,6 +231,8 @@ int main(int argc, char** argv) {
   int domain = -1;
   up->add_option("config", config_file, "launch config (YAML)")->required()->check(CLI::ExistingFile);
   up->add_option("--domain", domain, "DDS domain id (overrides the config)");
+  bool no_coordinator = false;
+  up->add_flag("--no-coordinator", no_coordinator, "start the services only: a script hosts the coordinator (lockstep.Coordinator)");
 
   auto* status = app.add_subcommand("status", "show a running simulation");
   int status_domain = 0;
@@ -252,7 +258,7 @@ int main(int argc, char** argv) {
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
   try {
-    if (*up) return Up(config_file, domain);
+    if (*up) return Up(config_file, domain, !no_coordinator);
     if (*status) return Status(status_domain, profile, wait_s, json);
     if (*map) {
       const std::string tool = BinDir() + "/lockstep-map";

@@ -3,7 +3,7 @@ the airsim module; both run over the native client in `lockstep._lockstep`."""
 import threading
 import weakref
 
-from lockstep._lockstep import (Client, ClientError, CommandRejected, SensorLate, SensorSample,  # noqa: F401
+from lockstep._lockstep import (Client, ClientError, CommandRejected, Coordinator, SensorLate, SensorSample,  # noqa: F401
                                 Multirotor, CommandFuture, Map, Waypoint, default_domain)
 
 _sessions = weakref.WeakValueDictionary()   # DDS domain -> the process's shared Client

@@ -10,6 +10,7 @@
 #include <memory>
 
 #include "commands.h"
+#include "embedded_coordinator.h"
 #include "map_queries.h"
 #include "lockstep/client/client.h"
 #include "lockstep/client/multirotor.h"
@@ -339,6 +340,7 @@ py::object Wp(const std::optional<map::Waypoint>& w) {
 }  // namespace
 
 PYBIND11_MODULE(_lockstep, m) {
+  python::AddEmbeddedCoordinator(m);
   m.doc() = "Lockstep's native client (C++ over DDS). Use lockstep.carla or lockstep.airsim.";
 
   static py::exception<ClientError> client_error(m, "ClientError", PyExc_RuntimeError);

@@ -2,6 +2,7 @@
 // bench_client's camera service: declares sensor.camera.rgb and publishes one 720p BGRA
 // frame per tick per spawned camera, with the steady-clock publication time (s) in
 // sensor_pose.position.x (bench only).
+#include <atomic>
 #include <chrono>
 #include <map>
 #include <string>
@@ -20,7 +21,12 @@ class BenchCamera final : public ServiceCore {
     return {bp::Make("sensor.camera.rgb", msg::ActorKind::ACTOR_SENSOR,
                      {bp::String("role_name", ""), bp::Int("image_size_x", 1280, 1, 3840), bp::Int("image_size_y", 720, 1, 2160)})};
   }
-  void BeginRun(const msg::WorldInfo&) override { images_.clear(); }
+  void BeginRun(const msg::WorldInfo&) override {
+    images_.clear();
+    cameras_ = 0;
+  }
+  // How many cameras it publishes (read by the bench from another thread).
+  size_t cameras() const { return cameras_; }
   bool StepNeverWaits() const override { return true; }
   void Step(const msg::Tick& tick) override {
     for (const auto& c : tick.commands()) {
@@ -28,6 +34,7 @@ class BenchCamera final : public ServiceCore {
         const uint32_t id = c.body().spawn_actor().actor();
         const std::string topic = topics::ImageTopicName(id);  // one topic per camera
         images_.emplace(id, Writer<msg::Image>(bus_, Topic<msg::Image>{topic.c_str(), QosKind::kImage}));
+        cameras_ = images_.size();
       }
     }
     for (auto& [id, writer] : images_) {
@@ -50,6 +57,7 @@ class BenchCamera final : public ServiceCore {
  private:
   Bus& bus_;
   std::map<uint32_t, Writer<msg::Image>> images_;
+  std::atomic<size_t> cameras_{0};
 };
 
 }  // namespace lockstep::bench

@@ -317,7 +317,13 @@ int main(int argc, char** argv) {
       camera = std::make_unique<lockstep::ServiceRunner>(*camera_bus, lockstep::ServiceOptions{"camera", "bench_camera", true},
                                                          *camera_core);
       camera_thread = std::thread([&] { camera->Run(stop); });
-      py_summary = child.Ask("rest");
+      if (child.Ask("rest") != "spawned") throw std::runtime_error("the Python client did not spawn the camera");
+      const auto until = Clock::now() + std::chrono::seconds(10);
+      while (camera_core->cameras() == 0) {
+        if (Clock::now() > until) throw std::runtime_error("the camera service did not step the camera's spawn frame in 10 s");
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+      }
+      py_summary = child.Ask("go");
     });
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_client: %s\n", e.what());

@@ -94,7 +94,13 @@ def on_image(sample):
     delays.append((time.monotonic() - published) * 1e3)
 
 
-world.tick()
+world.tick()  # the spawn frame
+# The camera service is not required, so the barrier does not wait for it, and its tick
+# reader keeps the newest tick only: a tick sent before it stepped the spawn frame could
+# replace that one. Wait until the bench says the camera exists.
+answer('spawned')
+if sys.stdin.readline().strip() != 'go':
+    sys.exit(1)
 native.listen(camera, on_image)
 for _ in range(200):
     world.tick()

@@ -167,79 +167,87 @@ struct EmptyWorld {
   Series cpp, py;
 };
 
+// A run config (synchronous, the bench's town) in a temporary folder, and one process per
+// service started with it; the processes end and the folder goes with this object.
+class ServiceProcesses {
+ public:
+  // `services`: (kind, perception); each is named after its kind.
+  ServiceProcesses(const std::string& name, int domain, const std::vector<std::pair<std::string, bool>>& services,
+                   double service_timeout_s)
+      : dir_(std::filesystem::temp_directory_path() / ("lockstep-bench-client-" + name + "-" + std::to_string(getpid()))),
+        file_((dir_ / (name + ".yaml")).string()) {
+    std::filesystem::create_directories(dir_);
+    {
+      std::ofstream f(file_);
+      f << "name: bench_" << name << "\ndomain_id: " << domain << "\nseed: 1\nmap: " << LOCKSTEP_BENCH_TOWN
+        << "\nworld: {synchronous_mode: true, fixed_delta_seconds: 0.05, service_timeout: " << service_timeout_s
+        << "}\nservices:\n";
+      for (const auto& [kind, perception] : services) {
+        f << "  - {name: " << kind << ", kind: " << kind << ", perception: " << (perception ? "true" : "false") << "}\n";
+      }
+    }
+    for (const auto& [kind, perception] : services) {
+      pids_.push_back(Spawn({BinDir() + "/lockstep_" + kind, "--name", kind, "--config", file_, "--domain", std::to_string(domain)}));
+    }
+  }
+  ~ServiceProcesses() {
+    for (pid_t p : pids_) kill(p, SIGTERM);
+    for (pid_t p : pids_) waitpid(p, nullptr, 0);
+    std::filesystem::remove_all(dir_);
+  }
+  ServiceProcesses(const ServiceProcesses&) = delete;
+  ServiceProcesses& operator=(const ServiceProcesses&) = delete;
+  const std::string& config_file() const { return file_; }
+
+ private:
+  std::filesystem::path dir_;
+  std::string file_;
+  std::vector<pid_t> pids_;
+};
+
 // Step 4: the services of the main job, each a process, required; no actors.
 EmptyWorld RunEmptyWorld(int domain, int rounds) {
-  const std::string dom = std::to_string(domain);
-  const auto dir = std::filesystem::temp_directory_path() / ("lockstep-bench-client-" + std::to_string(getpid()));
-  std::filesystem::create_directories(dir);
-  const std::string file = (dir / "empty_world.yaml").string();
   EmptyWorld out;
   std::vector<std::pair<std::string, bool>> kinds;  // (kind, perception)
   for (const auto& [kind, perception] : {std::pair{"air_sim", false}, {"ground_sim", false}, {"sensors", true}, {"render", true}}) {
-    if (std::filesystem::exists(BinDir() + "/lockstep_" + kind)) kinds.emplace_back(kind, perception);
+    if (!std::filesystem::exists(BinDir() + "/lockstep_" + kind)) continue;
+    kinds.emplace_back(kind, perception);
+    if (!out.services.empty()) out.services += ',';
+    out.services += kind;
   }
-  {
-    std::ofstream f(file);
-    f << "name: bench_empty_world\ndomain_id: " << domain << "\nseed: 1\nmap: " << LOCKSTEP_BENCH_TOWN
-      << "\nworld: {synchronous_mode: true, fixed_delta_seconds: 0.05, service_timeout: 60}\nservices:\n";
-    for (const auto& [kind, perception] : kinds) {
-      f << "  - {name: " << kind << ", kind: " << kind << ", perception: " << (perception ? "true" : "false") << "}\n";
-      out.services += (out.services.empty() ? "" : ",") + kind;
-    }
-  }
-  std::vector<pid_t> pids;
-  for (const auto& [kind, perception] : kinds) {
-    pids.push_back(Spawn({BinDir() + "/lockstep_" + kind, "--name", kind, "--config", file, "--domain", dom}));
-  }
+  ServiceProcesses services("empty_world", domain, kinds, 60);
   std::atomic<bool> stop{false};
-  std::exception_ptr failure;
-  {
-    auto bus = lockstep::CreateDdsBus({domain, "", "lockstep.participant", "bench-coordinator-empty-world"});
-    lockstep::Coordinator coordinator(*bus, lockstep::LoadLaunchConfig(file));
-    std::thread run([&] { coordinator.Run(stop); });
-    try {
-      InterleavedClients(rounds, dom, coordinator, &out.cpp, &out.py);
-    } catch (...) {
-      failure = std::current_exception();
-    }
+  auto bus = lockstep::CreateDdsBus({domain, "", "lockstep.participant", "bench-coordinator-empty-world"});
+  lockstep::Coordinator coordinator(*bus, lockstep::LoadLaunchConfig(services.config_file()));
+  std::thread run([&] { coordinator.Run(stop); });
+  try {
+    InterleavedClients(rounds, std::to_string(domain), coordinator, &out.cpp, &out.py);
+  } catch (...) {
     stop = true;
     run.join();
+    throw;
   }
-  for (pid_t p : pids) kill(p, SIGTERM);
-  for (pid_t p : pids) waitpid(p, nullptr, 0);
-  std::filesystem::remove_all(dir);
-  if (failure) std::rethrow_exception(failure);
+  stop = true;
+  run.join();
   return out;
 }
 
 // Step 5: the Python process hosts the coordinator (lockstep.Coordinator) of a run with
 // one no-op service process; its answer is {"tick_us":..,"barrier_us":..,...}.
 std::string RunEmbedded(int domain, int ticks) {
-  const std::string dom = std::to_string(domain);
-  const auto dir = std::filesystem::temp_directory_path() / ("lockstep-bench-client-embedded-" + std::to_string(getpid()));
-  std::filesystem::create_directories(dir);
-  const std::string file = (dir / "embedded.yaml").string();
-  {
-    std::ofstream f(file);
-    f << "name: bench_embedded\ndomain_id: " << domain << "\nseed: 1\nmap: " << LOCKSTEP_BENCH_TOWN
-      << "\nworld: {synchronous_mode: true, fixed_delta_seconds: 0.05, service_timeout: 30}\n"
-         "services:\n  - {name: noop, kind: noop}\n";
-  }
-  const pid_t noop = Spawn({BinDir() + "/lockstep_noop", "--name", "noop", "--config", file, "--domain", dom});
-  std::string answer;
-  std::exception_ptr failure;
-  try {
-    ChildProcess python({"/usr/bin/python3", LOCKSTEP_BENCH_SCRIPT, "--embedded", file, std::to_string(ticks)});
-    answer = python.ReadLine();
-    if (python.Wait() != 0) throw std::runtime_error("the Python process hosting the coordinator failed");
-  } catch (...) {
-    failure = std::current_exception();
-  }
-  kill(noop, SIGTERM);
-  waitpid(noop, nullptr, 0);
-  std::filesystem::remove_all(dir);
-  if (failure) std::rethrow_exception(failure);
+  ServiceProcesses noop("embedded", domain, {{"noop", false}}, 30);
+  ChildProcess python({"/usr/bin/python3", LOCKSTEP_BENCH_SCRIPT, "--embedded", noop.config_file(), std::to_string(ticks)});
+  const std::string answer = python.ReadLine();
+  if (python.Wait() != 0) throw std::runtime_error("the Python process hosting the coordinator failed");
   return answer;
+}
+
+// The number after "key": in a flat JSON line; -1 when the key is missing.
+double JsonNumber(const std::string& json, const char* key) {
+  std::string quoted = "\"";
+  quoted.append(key).append("\":");
+  const auto at = json.find(quoted);
+  return at == std::string::npos ? -1.0 : std::atof(json.c_str() + at + std::strlen(key) + 3);
 }
 
 }  // namespace
@@ -353,15 +361,11 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "bench_client: the embedded coordinator: %s\n", e.what());
     return 1;
   }
-  auto field = [](const std::string& json, const char* key) {
-    const auto at = json.find(std::string("\"") + key + "\":");
-    return at == std::string::npos ? -1.0 : std::atof(json.c_str() + at + std::strlen(key) + 3);
-  };
-  const double em_py = Round1(field(embedded, "tick_us")), em_barrier = Round1(field(embedded, "barrier_us"));
+  const double em_py = Round1(JsonNumber(embedded, "tick_us")), em_barrier = Round1(JsonNumber(embedded, "barrier_us"));
   const double em_ratio = em_barrier > 0 ? em_py / em_barrier : 0.0;
   std::printf("{\"bench\":\"client_tick_embedded_coordinator\",\"ticks\":%.0f,\"tick_roundtrip_us_python\":%.1f,"
               "\"barrier_median_us\":%.1f,\"python_to_barrier\":%.2f}\n",
-              field(embedded, "ticks"), em_py, em_barrier, em_ratio);
+              JsonNumber(embedded, "ticks"), em_py, em_barrier, em_ratio);
 
   const double ew_py = Round1(Median(empty.py.tick_us)), ew_py_barrier = Round1(Median(empty.py.barrier_us));
   const double ew_cpp = Round1(Median(empty.cpp.tick_us)), ew_cpp_barrier = Round1(Median(empty.cpp.barrier_us));
@@ -373,11 +377,7 @@ int main(int argc, char** argv) {
               ew_cpp_barrier > 0 ? ew_cpp / ew_cpp_barrier : 0.0);
 
   // The Python process prints {"waypoint_us":..,"image_ms":..,"images":..}.
-  auto value = [&](const char* key) {
-    const auto at = py_summary.find(std::string("\"") + key + "\":");
-    return at == std::string::npos ? -1.0 : std::atof(py_summary.c_str() + at + std::strlen(key) + 3);
-  };
-  const double waypoint_us = value("waypoint_us"), image_ms = value("image_ms");
+  const double waypoint_us = JsonNumber(py_summary, "waypoint_us"), image_ms = JsonNumber(py_summary, "image_ms");
   const double cpp_us = Round1(Median(cpp.tick_us)), cpp_barrier = Round1(Median(cpp.barrier_us));
   const double py_us = Round1(Median(py.tick_us)), py_barrier = Round1(Median(py.barrier_us));
   const double in_us = Round1(Median(in_process.tick_us));
@@ -386,7 +386,7 @@ int main(int argc, char** argv) {
   std::printf("{\"bench\":\"client_tick_python\",\"ticks\":%zu,\"median_us\":%.1f,\"barrier_median_us\":%.1f}\n", py.tick_us.size(),
               py_us, py_barrier);
   std::printf("{\"bench\":\"client_python\",\"get_waypoint_us\":%.2f,\"image_720p_to_numpy_ms\":%.3f,\"images\":%.0f}\n", waypoint_us,
-              image_ms, value("images"));
+              image_ms, JsonNumber(py_summary, "images"));
   std::printf("{\"bench\":\"client\",\"tick_roundtrip_us_cpp\":%.1f,\"tick_roundtrip_us_python\":%.1f,\"get_waypoint_us_python\":%.2f,"
               "\"image_720p_to_numpy_ms\":%.3f,\"barrier_median_us\":%.1f,\"python_to_barrier\":%.2f,"
               "\"barrier_median_us_during_cpp\":%.1f,\"cpp_to_barrier\":%.2f,\"tick_roundtrip_us_cpp_in_process\":%.1f,"

@@ -1213,6 +1213,7 @@ const char* CommandKindName(msg::CommandKind kind) {
     case msg::CommandKind::CMD_VEHICLE_PHYSICS: return "apply_physics_control";
     case msg::CommandKind::CMD_WALKER_AI: return "walker AI controller command";
     case msg::CommandKind::CMD_PEDESTRIANS: return "set_pedestrians_cross_factor";
+    case msg::CommandKind::CMD_DEBUG_DRAW: return "debug draw";
   }
   return "command";
 }

@@ -46,6 +46,29 @@ std::string First(S&&... reasons) {
   return out;
 }
 
+// CARLA's world.debug shapes: finite geometry, sizes >= 0, a unit box rotation.
+std::string CheckDebugDraw(const msg::DebugDraw& d) {
+  if (d.shapes().empty()) return "debug draw without shapes";
+  for (std::size_t i = 0; i < d.shapes().size(); ++i) {
+    const auto& s = d.shapes()[i];
+    const std::string at = "debug shape " + std::to_string(i) + ": ";
+    if (!Finite(s.begin()) || !Finite(s.end()) || !Finite(s.extent())) return at + "a location has a NaN or infinite value";
+    if (auto r = First(InRange("size", s.size(), 0, 1e4), InRange("arrow_size", s.arrow_size(), 0, 1e4),
+                       InRange("life_time", s.life_time(), -1e9, 1e9));
+        !r.empty()) {
+      return at + r;
+    }
+    if (s.kind() == msg::DebugShapeKind::DEBUG_BOX) {
+      if (s.extent().x() < 0 || s.extent().y() < 0 || s.extent().z() < 0) return at + "box extent must be >= 0";
+      msg::Pose p;
+      p.position(s.begin());
+      p.orientation(s.rotation());
+      if (auto r = CheckPose(p, "box"); !r.empty()) return at + r;
+    }
+  }
+  return {};
+}
+
 }  // namespace
 
 CommandProcessor::CommandProcessor(BlueprintLibrary library) : library_(std::move(library)) {}
@@ -226,6 +249,18 @@ std::string CommandProcessor::Check(const msg::Command& cmd, bool synchronous) c
         case P::TM_HYBRID_PHYSICS_MODE:
         case P::TM_SYNCHRONOUS_MODE:
         case P::TM_RESPAWN_DORMANT_VEHICLES: return InRange("flag", t.value(), 0, 1);
+        case P::TM_UPDATE_VEHICLE_LIGHTS:
+          if (t.actor() == 0) return "update_vehicle_lights needs a vehicle actor";
+          return InRange("update_vehicle_lights", t.value(), 0, 1);
+        case P::TM_LANE_OFFSET: return InRange("lane offset", t.value(), -100, 100);
+        case P::TM_COLLISION_DETECTION:
+          if (t.actor() == 0) return "collision_detection needs a vehicle actor";
+          if (!actors_.count(t.other_actor())) return "collision_detection: unknown other actor " + std::to_string(t.other_actor());
+          return InRange("collision_detection", t.value(), 0, 1);
+        case P::TM_RESPAWN_BOUNDARIES:
+          if (auto r = First(InRange("lower bound", t.value(), 0, 1e5), InRange("upper bound", t.value2(), 0, 1e5)); !r.empty()) return r;
+          if (t.value2() < t.value()) return "respawn boundaries: the upper bound is below the lower bound";
+          return {};
       }
       return "unknown traffic manager parameter";
     }
@@ -282,6 +317,8 @@ std::string CommandProcessor::Check(const msg::Command& cmd, bool synchronous) c
     case CommandKind::CMD_PEDESTRIANS:
       if (b.pedestrians().seed_only()) return {};
       return InRange("pedestrians cross factor", b.pedestrians().cross_factor(), 0, 1);
+    case CommandKind::CMD_DEBUG_DRAW:
+      return CheckDebugDraw(b.debug_draw());
   }
   return "unknown command kind";
 }

@@ -268,3 +268,68 @@ TEST_F(CommandProcessorTest, BadWorldSettingsAreRejected) {
 
 }  // namespace
 }  // namespace lockstep
+
+namespace lockstep {
+namespace {
+
+msg::DebugShape Box(double life_time = 1.0) {
+  msg::DebugShape s;
+  s.kind(msg::DebugShapeKind::DEBUG_BOX);
+  s.begin().x(10);
+  s.extent().x(1);
+  s.extent().y(1);
+  s.extent().z(1);
+  s.rotation().w(1);
+  s.size(0.1);
+  s.life_time(life_time);
+  return s;
+}
+
+msg::Command Draw(std::vector<msg::DebugShape> shapes) {
+  msg::DebugDraw d;
+  d.shapes(std::move(shapes));
+  msg::CommandBody b;
+  b.debug_draw(d);
+  return Make(b);
+}
+
+TEST_F(CommandProcessorTest, DebugShapesGoIntoTheTickAndBadOnesAreRejectedWithTheirFault) {
+  ASSERT_TRUE(Submit(Draw({Box()})).accepted());
+  auto pending = p.TakePending();
+  ASSERT_EQ(pending.size(), 1u);
+  EXPECT_EQ(pending[0].body()._d(), msg::CommandKind::CMD_DEBUG_DRAW);
+  EXPECT_FALSE(Submit(Draw({})).accepted()) << "a draw without shapes";
+  msg::DebugShape nan = Box();
+  nan.end().y(std::numeric_limits<double>::quiet_NaN());
+  auto r = Submit(Draw({Box(), nan}));
+  EXPECT_FALSE(r.accepted());
+  EXPECT_NE(r.reason().to_string().find("debug shape 1: a location has a NaN"), std::string::npos) << r.reason();
+  msg::DebugShape tilted = Box();
+  tilted.rotation().w(2);
+  r = Submit(Draw({tilted}));
+  EXPECT_FALSE(r.accepted());
+  EXPECT_NE(r.reason().to_string().find("unit quaternion"), std::string::npos) << r.reason();
+  msg::DebugShape thick = Box();
+  thick.size(-1);
+  r = Submit(Draw({thick}));
+  EXPECT_FALSE(r.accepted());
+  EXPECT_NE(r.reason().to_string().find("size = -1"), std::string::npos) << r.reason();
+  EXPECT_FALSE(p.HasPending());
+}
+
+TEST_F(CommandProcessorTest, UpdateVehicleLightsNeedsAVehicle) {
+  const uint32_t car = Submit(Spawn("vehicle.lockstep.sedan")).actor();
+  msg::TrafficManagerCommand tm;
+  tm.parameter(msg::TrafficManagerParameter::TM_UPDATE_VEHICLE_LIGHTS);
+  tm.value(1);
+  msg::CommandBody b;
+  b.traffic_manager(tm);
+  auto r = Submit(Make(b));
+  EXPECT_FALSE(r.accepted());
+  EXPECT_NE(r.reason().to_string().find("needs a vehicle"), std::string::npos) << r.reason();
+  b.traffic_manager().actor(car);
+  EXPECT_TRUE(Submit(Make(b)).accepted());
+}
+
+}  // namespace
+}  // namespace lockstep

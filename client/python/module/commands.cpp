@@ -121,7 +121,52 @@ const std::map<std::string, msg::TrafficManagerParameter> kTmParameters = {
     {"set_route", msg::TrafficManagerParameter::TM_SET_ROUTE},
     {"hybrid_physics_mode", msg::TrafficManagerParameter::TM_HYBRID_PHYSICS_MODE},
     {"respawn_dormant_vehicles", msg::TrafficManagerParameter::TM_RESPAWN_DORMANT_VEHICLES},
+    {"update_vehicle_lights", msg::TrafficManagerParameter::TM_UPDATE_VEHICLE_LIGHTS},
+    {"lane_offset", msg::TrafficManagerParameter::TM_LANE_OFFSET},
+    {"collision_detection", msg::TrafficManagerParameter::TM_COLLISION_DETECTION},
+    {"respawn_boundaries", msg::TrafficManagerParameter::TM_RESPAWN_BOUNDARIES},
 };
+
+const std::map<std::string, msg::DebugShapeKind> kDebugShapes = {
+    {"point", msg::DebugShapeKind::DEBUG_POINT}, {"line", msg::DebugShapeKind::DEBUG_LINE},
+    {"arrow", msg::DebugShapeKind::DEBUG_ARROW}, {"box", msg::DebugShapeKind::DEBUG_BOX},
+    {"string", msg::DebugShapeKind::DEBUG_STRING}};
+
+// One world.debug shape: kind, hud, begin, end, extent, rotation (w, x, y, z), size,
+// arrow_size, color (r, g, b, a), life_time, persistent_lines, draw_shadow, text.
+msg::DebugShape DebugShapeFromDict(const py::dict& d) {
+  Fields f(d, "debug shape");
+  msg::DebugShape s;
+  s.kind(EnumOf(f.Need<std::string>("kind"), kDebugShapes, "debug shape kind"));
+  s.hud(f.Get<bool>("hud", false));
+  s.begin(f.Vec3("begin"));
+  s.end(f.Vec3("end"));
+  s.extent(f.Vec3("extent"));
+  const auto q = f.Get<std::vector<double>>("rotation", {1, 0, 0, 0});
+  if (q.size() != 4) throw py::value_error("debug shape: 'rotation' needs 4 values (w, x, y, z)");
+  s.rotation().w(q[0]);
+  s.rotation().x(q[1]);
+  s.rotation().y(q[2]);
+  s.rotation().z(q[3]);
+  s.size(f.Get<double>("size", 0.1));
+  s.arrow_size(f.Get<double>("arrow_size", 0.1));
+  const auto c = f.Get<std::vector<int>>("color", {255, 0, 0, 255});
+  if (c.size() != 4) throw py::value_error("debug shape: 'color' needs 4 values (r, g, b, a)");
+  for (int v : c) {
+    if (v < 0 || v > 255) throw py::value_error("debug shape: colour values are 0..255");
+  }
+  s.r(static_cast<uint8_t>(c[0]));
+  s.g(static_cast<uint8_t>(c[1]));
+  s.b(static_cast<uint8_t>(c[2]));
+  s.a(static_cast<uint8_t>(c[3]));
+  s.life_time(f.Get<double>("life_time", -1));
+  s.persistent_lines(f.Get<bool>("persistent_lines", true));
+  s.draw_shadow(f.Get<bool>("draw_shadow", false));
+  const std::string text = f.Get<std::string>("text", "");
+  s.text(text.substr(0, 256));
+  f.CheckAllUsed();
+  return s;
+}
 
 const std::map<std::string, msg::ActorPhysicsKind> kPhysicsKinds = {
     {"set_target_velocity", msg::ActorPhysicsKind::PHYSICS_SET_TARGET_VELOCITY},
@@ -232,6 +277,8 @@ msg::CommandBody CommandFromDict(const py::dict& d) {
     x.parameter(EnumOf(f.Need<std::string>("parameter"), kTmParameters, "traffic manager parameter"));
     x.actor(f.Get<uint32_t>("actor", 0));
     x.value(f.Get<double>("value", 0));
+    x.other_actor(f.Get<uint32_t>("other_actor", 0));
+    x.value2(f.Get<double>("value2", 0));
     if (f.Has("path")) {
       for (const auto& [px, py_, pz] : f.Get<std::vector<std::tuple<double, double, double>>>("path", {})) {
         msg::Vector3 v;
@@ -280,6 +327,11 @@ msg::CommandBody CommandFromDict(const py::dict& d) {
     x.location(f.Vec3("location"));
     x.max_speed(f.Get<double>("max_speed", 0));
     b.walker_ai(x);
+  } else if (type == "debug_draw") {
+    msg::DebugDraw x;
+    for (const auto& item : f.Need<py::list>("shapes")) x.shapes().push_back(DebugShapeFromDict(item.cast<py::dict>()));
+    if (x.shapes().size() > 4096) throw py::value_error("command 'debug_draw': at most 4096 shapes");
+    b.debug_draw(x);
   } else if (type == "drone") {
     msg::DroneCommand x;
     x.actor(f.Need<uint32_t>("actor"));
@@ -297,7 +349,7 @@ msg::CommandBody CommandFromDict(const py::dict& d) {
   } else {
     throw py::value_error("unknown command type '" + type +
                           "' (spawn, destroy, set_transform, vehicle_control, walker_control, traffic_light, "
-                          "traffic_manager, drone, ackermann, actor_physics, vehicle_physics, walker_ai, pedestrians)");
+                          "traffic_manager, drone, ackermann, actor_physics, vehicle_physics, walker_ai, pedestrians, debug_draw)");
   }
   f.CheckAllUsed();
   return b;

@@ -499,6 +499,7 @@ void SensorsService::Publish(const s::StepOutput& out, const msg::FrameStamp& st
     m.other_actor(t.data.other_actor);
     m.other_kind(ToWire(t.data.other_kind));
     m.distance(t.data.distance);
+    m.other_semantic_tag(t.data.other_tag);
     obstacle_writer_.Write(m);
   }
   for (const auto& t : out.collision) {
@@ -509,6 +510,7 @@ void SensorsService::Publish(const s::StepOutput& out, const msg::FrameStamp& st
     m.other_actor(t.data.event.other_actor);
     m.other_kind(ToWire(t.data.event.other_kind));
     m.normal_impulse(FromVec(t.data.event.normal_impulse));
+    m.other_semantic_tag(t.data.event.other_tag);
     collision_writer_.Write(m);
   }
   for (const auto& t : out.lane_invasion) {

@@ -46,9 +46,6 @@ std::vector<AttributeSpec> LidarAttributes(bool semantic) {
 }
 
 std::vector<SensorBlueprint> Build() {
-  // AirSim's IMU bias instability (random walk per sqrt(s)), in SI units.
-  const double gyro_bias_stability = 4.6 / 3600 * M_PI / 180;  // 4.6 deg/h
-  const double accel_bias_stability = 36e-6 * 9.80665;         // 36 ug
   return {
       {"sensor.lidar.ray_cast", SensorType::kLidar, LidarAttributes(false)},
       {"sensor.lidar.ray_cast_semantic", SensorType::kSemanticLidar, LidarAttributes(true)},
@@ -59,8 +56,10 @@ std::vector<SensorBlueprint> Build() {
        Common({F("noise_accel_stddev_x", 0.0, 0, 1e3), F("noise_accel_stddev_y", 0.0, 0, 1e3), F("noise_accel_stddev_z", 0.0, 0, 1e3),
                F("noise_gyro_stddev_x", 0.0, 0, 1e3), F("noise_gyro_stddev_y", 0.0, 0, 1e3), F("noise_gyro_stddev_z", 0.0, 0, 1e3),
                F("noise_gyro_bias_x", 0.0, -1e3, 1e3), F("noise_gyro_bias_y", 0.0, -1e3, 1e3), F("noise_gyro_bias_z", 0.0, -1e3, 1e3),
-               F("noise_gyro_bias_stability", gyro_bias_stability, 0, 1e3),
-               F("noise_accel_bias_stability", accel_bias_stability, 0, 1e3), I("noise_seed", 0, 0, 4294967295.0)})},
+               // Lockstep's: a bias random walk (sigma per sqrt(s)), AirSim's model; CARLA has none, so 0
+               // (off) by default; the airsim module sets AirSim's 4.6 deg/h and 36 ug.
+               F("noise_gyro_bias_stability", 0.0, 0, 1e3), F("noise_accel_bias_stability", 0.0, 0, 1e3),
+               I("noise_seed", 0, 0, 4294967295.0)})},
       {"sensor.other.gnss", SensorType::kGnss,
        Common({F("noise_alt_bias", 0.0, -1e6, 1e6), F("noise_alt_stddev", 0.0, 0, 1e6), F("noise_lat_bias", 0.0, -90, 90),
                F("noise_lat_stddev", 0.0, 0, 90), F("noise_lon_bias", 0.0, -180, 180), F("noise_lon_stddev", 0.0, 0, 180),

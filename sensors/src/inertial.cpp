@@ -11,12 +11,15 @@ constexpr double kGravity = 9.81;  // m/s^2, CARLA's IMU constant
 Vec3 Axes(const Attributes& a, const std::string& prefix) {
   return Vec3(a.Float(prefix + "_x"), a.Float(prefix + "_y"), a.Float(prefix + "_z"));
 }
+// CARLA's noise_gyro_bias_{x,y,z} add to CARLA's gyroscope, whose frame is Unreal's (y right):
+// an angular velocity there is the FLU one as (-x, y, -z), so the bias in FLU is the same.
+Vec3 CarlaRatesToFlu(const Vec3& w) { return Vec3(-w.x(), w.y(), -w.z()); }
 }  // namespace
 
 Imu::Imu(const Attributes& a, uint64_t seed)
     : accel_stddev_(Axes(a, "noise_accel_stddev")),
       gyro_stddev_(Axes(a, "noise_gyro_stddev")),
-      gyro_bias_(Axes(a, "noise_gyro_bias")),
+      gyro_bias_(CarlaRatesToFlu(Axes(a, "noise_gyro_bias"))),
       gyro_drift_(a.Float("noise_gyro_bias_stability")),
       accel_drift_(a.Float("noise_accel_bias_stability")),
       rng_(seed) {}
@@ -58,9 +61,14 @@ ImuSample Imu::Sample(const Pose& pose, const Vec3& velocity, const Vec3& angula
   // AirSim's bias instability: a random walk of sigma = stability * sqrt(dt).
   s.accelerometer += accel_walk_;
   s.gyroscope += gyro_walk_;
+  // Off by default (CARLA has none): no draws then, CARLA's noise stream alone.
   const double sq = std::sqrt(std::max(dt, 0.0));
-  for (int k = 0; k < 3; ++k) gyro_walk_[k] += rng_.Normal(0.0, gyro_drift_ * sq);
-  for (int k = 0; k < 3; ++k) accel_walk_[k] += rng_.Normal(0.0, accel_drift_ * sq);
+  if (gyro_drift_ > 0) {
+    for (int k = 0; k < 3; ++k) gyro_walk_[k] += rng_.Normal(0.0, gyro_drift_ * sq);
+  }
+  if (accel_drift_ > 0) {
+    for (int k = 0; k < 3; ++k) accel_walk_[k] += rng_.Normal(0.0, accel_drift_ * sq);
+  }
   return s;
 }
 

@@ -39,7 +39,7 @@ Lidar::Lidar(const Attributes& a, bool semantic, uint64_t seed)
       attenuation_(semantic ? 0 : a.Float("atmosphere_attenuation_rate")),
       drop_general_(semantic ? 0 : a.Float("dropoff_general_rate")),
       drop_limit_(semantic ? 1 : a.Float("dropoff_intensity_limit")),
-      drop_zero_(semantic ? 1 : a.Float("dropoff_zero_intensity")),
+      drop_zero_(semantic ? 0 : a.Float("dropoff_zero_intensity")),
       noise_(semantic ? 0 : a.Float("noise_stddev")),
       semantic_(semantic),
       rng_(seed) {
@@ -100,10 +100,15 @@ PointCloudSample Lidar::Scan(const RayScene& scene, const Pose& pose, double dt,
   scene.Intersect(rays_.data(), hits_.data(), rays_.size());
 
   // ComputeAndSaveDetections: channel by channel, in ray order; noise along the ray,
-  // then the intensity-based drop-off (only below dropoff_intensity_limit).
+  // then the intensity-based drop-off (only at or below dropoff_intensity_limit): CARLA's
+  // PostprocessDetection keeps a point with probability alpha * I + beta, alpha =
+  // dropoff_zero_intensity / dropoff_intensity_limit, beta = 1 - dropoff_zero_intensity (so
+  // an intensity of 0 is dropped with probability dropoff_zero_intensity, one at the limit
+  // always kept).
   const double attenuation = attenuation_ + kFogAttenuation * weather.fog_density / 100.0 +
                              kRainAttenuation * weather.precipitation / 100.0;
-  const double alpha = drop_limit_ > 0 ? (1.0 - drop_zero_) / drop_limit_ : 0.0;
+  const double alpha = drop_limit_ > 0 ? drop_zero_ / drop_limit_ : 0.0;
+  const double beta = 1.0 - drop_zero_;
   out.data.reserve(rays_.size() * out.point_step);
   for (size_t i = 0; i < rays_.size(); ++i) {
     const Hit& h = hits_[i];
@@ -121,7 +126,7 @@ PointCloudSample Lidar::Scan(const RayScene& scene, const Pose& pose, double dt,
     } else {
       if (noise_ > 1e-7) p += ray_local_[i] * rng_.Normal(0.0, noise_);
       const double intensity = std::exp(-attenuation * h.distance);
-      if (intensity <= drop_limit_ && !(rng_.Uniform() < alpha * intensity + drop_zero_)) continue;
+      if (intensity <= drop_limit_ && !(rng_.Uniform() < alpha * intensity + beta)) continue;
       const float xyzi[4] = {static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()),
                              static_cast<float>(intensity)};
       const size_t o = out.data.size();

@@ -55,6 +55,7 @@ ObstacleSample ObstacleDetector::Sample(const RayScene& scene, const Pose& pose,
       best.distance = h.distance;
       best.other_actor = h.actor;
       best.other_kind = h.kind;
+      best.other_tag = h.tag;
     }
   }
   if (best.other_kind == HitKind::kNone) best.distance = 0;

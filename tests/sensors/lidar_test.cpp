@@ -138,7 +138,7 @@ TEST(Lidar, GeneralDropOffRemovesTheConfiguredShare) {
 
 TEST(Lidar, IntensityDropOffFollowsCarla) {
   // Intensity exp(-0.004 d) at 30 m = 0.887 > 0.8: always kept. With limit 1 every point
-  // is below it and kept with probability (1 - 0.4) / 1 * I + 0.4 (about 0.93 here).
+  // is below it and kept with CARLA's probability 0.4 / 1 * I + (1 - 0.4) (about 0.955 here).
   for (const char* limit : {"0.8", "1"}) {
     SensorWorld w(5);
     w.scene().SetStatic({test::Wall(30)});
@@ -153,8 +153,51 @@ TEST(Lidar, IntensityDropOffFollowsCarla) {
       EXPECT_EQ(total, static_cast<size_t>(rays));
     } else {
       const double i30 = std::exp(-0.004 * 30.0);  // near the axis; off-axis rays are a bit longer
-      EXPECT_NEAR(total / rays, 0.6 * i30 + 0.4, 0.01);
+      EXPECT_NEAR(total / rays, 0.4 * i30 + 0.6, 0.01);
     }
+  }
+}
+
+// CARLA's RayCastLidar: a point of intensity I at or below dropoff_intensity_limit is kept
+// with probability (dropoff_zero_intensity / limit) I + (1 - dropoff_zero_intensity): an
+// intensity of 0 is dropped with probability dropoff_zero_intensity, one at the limit
+// always kept. Here I = 0.5 (attenuation 0.1 / m at ln 2 / 0.1 m), limit 1, zero 0.8:
+// kept 0.8 * 0.5 + 0.2 = 0.6 (the inverted model would keep 0.2 * 0.5 + 0.8 = 0.9).
+TEST(Lidar, IntensityDropOffKeepsZeroOverLimitTimesIntensityPlusOneMinusZero) {
+  const double d = std::log(2.0) / 0.1;
+  SensorWorld w(11);
+  w.scene().SetStatic({test::Wall(d)});
+  ASSERT_EQ(w.Add(Spawn(10, "sensor.lidar.ray_cast",
+                        {{"range", "100"}, {"dropoff_general_rate", "0"}, {"dropoff_intensity_limit", "1"},
+                         {"dropoff_zero_intensity", "0.8"}, {"atmosphere_attenuation_rate", "0.1"}, {"channels", "1"},
+                         {"upper_fov", "0"}, {"lower_fov", "0"}, {"horizontal_fov", "2"}, {"points_per_second", "200000"}})),
+            "");
+  size_t kept = 0, rays = 0;
+  double intensity_sum = 0;
+  for (int k = 1; k <= 20; ++k) {
+    const auto pc = w.Step(Frame(k, kDt), kDt).point_clouds.at(0).data;
+    kept += pc.point_count;
+    rays += 10000;  // round(200000 * 0.05 / 1)
+    for (size_t i = 0; i < pc.point_count; ++i) intensity_sum += pc.Intensity(i);
+  }
+  ASSERT_GT(kept, 0u);
+  const double mean_i = intensity_sum / kept;
+  EXPECT_NEAR(mean_i, 0.5, 1e-4) << "the rays hit the wall at ln 2 / 0.1 m (within 1 deg of the axis)";
+  // 200000 rays: the kept share's standard deviation is 0.0011.
+  EXPECT_NEAR(static_cast<double>(kept) / rays, 0.8 / 1.0 * mean_i + (1 - 0.8), 0.006);
+}
+
+// dropoff_general_rate: CARLA drops each ray before it is cast when U[0, 1) < the rate.
+TEST(Lidar, GeneralDropOffKeepsOneMinusTheRate) {
+  for (double rate : {0.0, 0.2, 0.9}) {
+    SensorWorld w(12);
+    w.scene().SetStatic(test::Room(20));
+    ASSERT_EQ(w.Add(Spawn(10, "sensor.lidar.ray_cast",
+                          {{"range", "100"}, {"dropoff_general_rate", std::to_string(rate)}, {"dropoff_intensity_limit", "0"}})),
+              "");
+    size_t total = 0;
+    for (int k = 1; k <= 20; ++k) total += w.Step(Frame(k, kDt), kDt).point_clouds.at(0).data.point_count;
+    EXPECT_NEAR(static_cast<double>(total) / (20 * 32 * 88), 1 - rate, rate == 0 ? 0 : 0.01) << "rate " << rate;
   }
 }
 
@@ -191,7 +234,9 @@ TEST(Lidar, FogAttenuatesReturns) {
       EXPECT_NEAR(max_i, std::exp(-(0.004 + 0.03) * 40), 1e-4);  // full fog adds 0.03 / m
     }
   }
-  EXPECT_LT(counts[1], counts[0] * 0.6);
+  // Without fog every return (I = 0.85) is above the 0.8 limit; with it I = exp(-0.034 * 40)
+  // = 0.257 and CARLA's drop-off keeps 0.4 / 0.8 * I + 0.6 of them.
+  EXPECT_NEAR(static_cast<double>(counts[1]) / counts[0], 0.5 * std::exp(-0.034 * 40) + 0.6, 0.01);
 }
 
 TEST(SemanticLidar, ClassesAndObjectsAtKnownHits) {

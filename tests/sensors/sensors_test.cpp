@@ -100,6 +100,45 @@ TEST(Imu, OnACarTurningAtConstantSpeedReadsTheCentripetalAcceleration) {
   }
 }
 
+// CARLA's IMU has no bias random walk: sensor.other.imu's stability attributes are 0 by
+// default, so at rest with no noise the gyroscope reads exactly 0 for ever; set, they walk.
+TEST(Imu, NoBiasRandomWalkByDefaultAnOptionOn) {
+  for (bool walk : {false, true}) {
+    SensorWorld w(4);
+    std::map<std::string, std::string> attrs;
+    if (walk) attrs = {{"noise_gyro_bias_stability", "0.01"}, {"noise_accel_bias_stability", "0.01"}};
+    ASSERT_EQ(w.Add(Spawn(10, "sensor.other.imu", attrs, 5)), "");
+    const Actor car = MakeActor(5, ActorKind::kVehicle, "vehicle.lockstep.sedan", MakePose(10, 5, 0.75, 0.3), Vec3(2.3, 1, 0.75));
+    double max_gyro = 0, max_accel_xy = 0;
+    for (int k = 1; k <= 400; ++k) {
+      const ImuSample& s = w.Step(Frame(k, kDt, {car}), kDt).imu.at(0).data;
+      max_gyro = std::max(max_gyro, s.gyroscope.norm());
+      if (k > 2) max_accel_xy = std::max(max_accel_xy, s.accelerometer.head<2>().norm());
+    }
+    if (walk) {
+      EXPECT_GT(max_gyro, 1e-3);
+      EXPECT_GT(max_accel_xy, 1e-3);
+    } else {
+      EXPECT_EQ(max_gyro, 0.0);
+      EXPECT_LT(max_accel_xy, 1e-9);
+    }
+  }
+}
+
+// noise_gyro_bias_{x,y,z} are CARLA's, in CARLA's gyroscope frame (Unreal's, y right): an
+// angular velocity there is the FLU one as (-x, y, -z). The sample is FLU (the wire's), so
+// a CARLA bias (0.1, 0.2, 0.3) reads (-0.1, 0.2, -0.3) here, and (0.1, 0.2, 0.3) in carla.
+TEST(Imu, GyroBiasIsGivenInCarlasFrame) {
+  SensorWorld w(4);
+  ASSERT_EQ(w.Add(Spawn(10, "sensor.other.imu", {{"noise_gyro_bias_x", "0.1"}, {"noise_gyro_bias_y", "0.2"}, {"noise_gyro_bias_z", "0.3"}}, 5)),
+            "");
+  const Actor car = MakeActor(5, ActorKind::kVehicle, "vehicle.lockstep.sedan", MakePose(10, 5, 0.75), Vec3(2.3, 1, 0.75));
+  const ImuSample& s = w.Step(Frame(1, kDt, {car}), kDt).imu.at(0).data;
+  EXPECT_NEAR(s.gyroscope.x(), -0.1, 1e-12);
+  EXPECT_NEAR(s.gyroscope.y(), 0.2, 1e-12);
+  EXPECT_NEAR(s.gyroscope.z(), -0.3, 1e-12);
+}
+
 TEST(Gnss, KnownOffsetGivesCarlasLatitudeAndLongitude) {
   // Expected values from CARLA's formula (GeoLocation::Transform), computed apart.
   struct Case {

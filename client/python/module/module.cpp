@@ -297,6 +297,7 @@ py::dict SampleFields(const SensorSample& s) {
       d["actor"] = m.actor();
       d["other_actor"] = m.other_actor();
       d["other_kind"] = static_cast<int>(m.other_kind());
+      d["other_semantic_tag"] = static_cast<int>(m.other_semantic_tag());
       d["normal_impulse"] = Vec(m.normal_impulse());
       break;
     }
@@ -323,6 +324,8 @@ py::dict SampleFields(const SensorSample& s) {
       const auto& m = s.As<msg::ObstacleDetection>();
       d["actor"] = m.actor();
       d["other_actor"] = m.other_actor();
+      d["other_kind"] = static_cast<int>(m.other_kind());
+      d["other_semantic_tag"] = static_cast<int>(m.other_semantic_tag());
       d["distance"] = m.distance();
       break;
     }

@@ -132,6 +132,11 @@ _attached = weakref.WeakKeyDictionary()   # session (lockstep.Client) -> its (ru
 _attached_lock = threading.Lock()
 
 
+# AirSim 1.8's ImuSimpleParams: gyro bias stability 4.6 deg/h, accel 36 ug (SI units).
+_AIRSIM_IMU_ATTRIBUTES = {'noise_gyro_bias_stability': repr(4.6 / 3600 * math.pi / 180),
+                          'noise_accel_bias_stability': repr(36e-6 * 9.80665)}
+
+
 def _attached_sensors(client):
     """The session's attached sensors of its current run (a reset starts a new set)."""
     run = client.world_info()['run']
@@ -463,7 +468,9 @@ class MultirotorClient:
 
     # --- sensors (spawned on first use, attached to the drone) ---
     def getImuData(self, imu_name='', vehicle_name=''):
-        s = _attached_sensors(self._client).latest('getImuData', self._drone(vehicle_name), 'sensor.other.imu', imu_name)
+        # AirSim's IMU bias instability (a random walk; sensor.other.imu has it off, as CARLA).
+        s = _attached_sensors(self._client).latest('getImuData', self._drone(vehicle_name), 'sensor.other.imu', imu_name,
+                                                   _AIRSIM_IMU_ATTRIBUTES)
         f = s.fields()
         out = ImuData()
         out.time_stamp = int(s.sim_time * 1e9)

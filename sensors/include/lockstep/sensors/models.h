@@ -31,14 +31,14 @@ struct PointCloudSample {
 
 struct RadarDetection {
   float velocity = 0;   // m/s, radial, towards the sensor negative
-  float azimuth = 0;    // rad, positive to the left (FLU)
+  float azimuth = 0;    // rad, positive to the left (FLU; the carla module gives CARLA's, right positive)
   float altitude = 0;   // rad, positive up
   float depth = 0;      // m
 };
 
 struct ImuSample {
   Vec3 accelerometer = Vec3::Zero();  // m/s^2, sensor frame, specific force (gravity included)
-  Vec3 gyroscope = Vec3::Zero();      // rad/s, sensor frame
+  Vec3 gyroscope = Vec3::Zero();      // rad/s, sensor frame (FLU; CARLA's is (-x, y, -z) of it)
   double compass = 0;                 // rad, from north, clockwise
   Quat orientation = Quat::Identity();
 };
@@ -62,6 +62,7 @@ struct DistanceSample {
 struct ObstacleSample {
   uint32_t other_actor = 0;
   HitKind other_kind = HitKind::kNone;
+  uint8_t other_tag = 0;  // CARLA semantic tag of what was hit (carla: "static.<tag>" for the scene)
   double distance = 0;  // m
 };
 

@@ -49,9 +49,9 @@ struct TmState {
   int lane_change = 0;                   // forced: -1 left, +1 right
   double lane_change_cooldown = 0;       // s
   double random_draw_timer = 0;
-  uint64_t ignore_draw_key = 0;          // junction entry the ignore-lights draw was made for
-  bool ignore_light = false;
-  bool ignore_sign = false;              // drawn with ignore_light, for a stop sign there
+  uint64_t ignore_draw_key = 0;          // unused (kept in the saved state's layout)
+  bool ignore_light = false;             // this tick's ignore-lights draw (CARLA: every tick at red / yellow)
+  bool ignore_sign = false;              // this tick's ignore-signs draw, before a stop sign
   double sign_wait = 0;                  // s stopped at the stop sign ahead
   uint64_t sign_done_key = 0;            // junction entry whose stop sign it has stopped at
   uint64_t entry_key = 0;                // junction entry ahead (lane key) last step

@@ -352,18 +352,18 @@ void World::Impl::TmVehicle(VehicleActor* v, double dt, std::map<int, std::vecto
       const uint64_t key = LaneKey(path[i]);
       const int light = town->LightOfLane(path[i].road, path[i].section, path[i].lane);
       bool must_stop = false;
-      if (s.ignore_draw_key != key) {
-        // Once per junction entry: will it run this light / this stop sign?
-        s.ignore_draw_key = key;
-        s.ignore_light = s.rng.Percent(Get(s.params.ignore_lights_percentage, tm.ignore_lights_percentage));
-        s.ignore_sign = s.rng.Percent(Get(s.params.ignore_signs_percentage, tm.ignore_signs_percentage));
-      }
+      // CARLA's TrafficLightStage draws the ignore percentages every tick, not once per
+      // junction: at a red or yellow light (a stop sign) the vehicle stops this tick unless
+      // a draw in [0, 100) falls below ignore_lights_percentage (ignore_signs_percentage).
+      s.ignore_light = false;
+      s.ignore_sign = false;
       if (s.entry_key != key) s.sign_done_key = 0, s.sign_wait = 0;  // a new junction entry ahead
       const int sign = town->SignOfLane(path[i].road, path[i].section, path[i].lane);
       if (sign >= 0 && light < 0 && town->Signs()[static_cast<size_t>(sign)].type == "206") {
         // Stop sign: a full stop at the line for kStopSignTime, then the junction's
         // conflict check decides (yield signs: the conflict check alone).
         const bool done = s.sign_done_key == key;
+        if (!done) s.ignore_sign = s.rng.Percent(Get(s.params.ignore_signs_percentage, tm.ignore_signs_percentage));
         if (!done && !s.ignore_sign) {
           must_stop = true;
           if (front < 2.0 && speed < 0.1) {
@@ -381,6 +381,8 @@ void World::Impl::TmVehicle(VehicleActor* v, double dt, std::map<int, std::vecto
         s.light = light;
         s.light_distance = std::max(0.0, front);
         const LightColor c = lights[static_cast<size_t>(light)].color;
+        if (c == LightColor::kRed || c == LightColor::kYellow)
+          s.ignore_light = s.rng.Percent(Get(s.params.ignore_lights_percentage, tm.ignore_lights_percentage));
         if (!s.ignore_light) {
           if (c == LightColor::kRed) must_stop = front > -0.5;
           if (c == LightColor::kYellow) must_stop = front > speed * speed / (2 * kYellowDecel);

@@ -36,7 +36,7 @@ struct TmGlobal {
   double random_left_lanechange_percentage = 0;
   double random_right_lanechange_percentage = 0;
   bool hybrid_physics_mode = false;
-  double hybrid_physics_radius = 50.0;        // m
+  double hybrid_physics_radius = 70.0;        // m, CARLA's Parameters.h (the docs' 50 is the setter's example)
   uint64_t random_seed = 0;                   // deterministic seed (0 = the run seed)
   bool synchronous_mode = true;               // always lock-step here
   double blocked_time_threshold = 90.0;       // s, then respawned

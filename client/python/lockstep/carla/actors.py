@@ -178,7 +178,8 @@ class Actor:
         if not s:
             return Vector3D()
         w = s['angular_velocity']
-        return Vector3D(math.degrees(w[0]), -math.degrees(w[1]), -math.degrees(w[2]))  # deg/s, CARLA's sense
+        # deg/s in CARLA's (Unreal's) world frame: a pseudovector under the y mirror, (-x, y, -z).
+        return Vector3D(-math.degrees(w[0]), math.degrees(w[1]), -math.degrees(w[2]))
 
     def get_acceleration(self):
         s = self._state()
@@ -229,7 +230,7 @@ class Actor:
         """deg/s, world (CARLA's frame and sense, as get_angular_velocity returns it)."""
         w = angular_velocity
         self._physics('Actor.set_target_angular_velocity', 'set_target_angular_velocity',
-                      value=(math.radians(w.x), -math.radians(w.y), -math.radians(w.z)))
+                      value=(-math.radians(w.x), math.radians(w.y), -math.radians(w.z)))
 
     def enable_constant_velocity(self, velocity):
         unsupported('Actor.enable_constant_velocity', 'ground_sim has no constant-velocity mode; call '

@@ -504,3 +504,17 @@ def test_an_obstacle_detector_looking_down_sees_carlas_static_road(world):
         assert e.distance == pytest.approx(4.0, abs=0.3)
     finally:
         det.destroy()
+
+
+
+def test_int_attributes_are_read_as_carla_reads_them_with_atoi():
+    # lidar_to_camera.py sets channels to str(64.0); CARLA's ActorAttribute reads ints with atoi.
+    decl = {'id': 'sensor.lidar.ray_cast', 'tags': '', 'kind': 'sensor',
+            'attributes': [{'id': 'channels', 'type': 'int', 'default': '32', 'min': 1, 'max': 256,
+                            'recommended_values': ['32'], 'modifiable': True, 'restricted': False}]}
+    bp = carla.ActorBlueprint(decl)
+    bp.set_attribute('channels', '64.0')
+    assert bp.get_attribute('channels').as_int() == 64
+    assert bp.spawn_attributes()['channels'] == '64'  # what the sensors service is sent
+    with pytest.raises(ValueError, match='channels'):
+        bp.set_attribute('channels', 'many')

@@ -2,6 +2,7 @@
 declarations the running services publish (lockstep/blueprints), never from a copy."""
 import fnmatch
 import random
+import re
 
 from .geometry import Color
 
@@ -128,6 +129,10 @@ class ActorBlueprint:
         value = str(value)
         if attr.type == 'bool':
             value = value.lower()
+        if attr.type == 'int':
+            # CARLA reads int attributes with atoi: '64.0' (lidar_to_camera.py's channels) is 64.
+            m = re.match(r'\s*([+-]?\d+)', value)
+            value = str(int(m.group(1))) if m else value
         _check_value(attr._decl, value)
         self._attrs[id] = ActorAttribute(attr._decl, value)
         self._set[id] = value

@@ -80,7 +80,7 @@ int Samples(const std::string& dir) {
   for (const char* preset : {"ClearSunset", "HardRainNoon", "ClearNight", "WetCloudySunset", "DustStorm"}) {
     town.world.weather = WeatherPreset(preset);
     const bool night = ComputeLighting(town.world.weather).night;
-    for (auto& a : town.world.actors) a.lights_on = night;
+    for (auto& a : town.world.actors) a.light_state = night ? light::kPosition | light::kLowBeam : 0u;
     auto f = r.RenderFrames({car}, town.world)[0];
     std::string name = std::string("car_rgb_") + preset;
     Write(dir, name, f.color);
@@ -89,7 +89,7 @@ int Samples(const std::string& dir) {
   // to 2 (CARLA's 10 keeps the night as dark as the manual image above).
   {
     town.world.weather = WeatherPreset("ClearNight");
-    for (auto& a : town.world.actors) a.lights_on = true;
+    for (auto& a : town.world.actors) a.light_state = light::kPosition | light::kLowBeam;
     ExposureSettings es;
     es.min_bright = 2;
     AutoExposure ae(es);
@@ -101,7 +101,7 @@ int Samples(const std::string& dir) {
       ae.Update(f.color.data(), kW, kH, c.exposure, c.gamma, k == 0 ? 0.0 : 0.5);
     }
     Write(dir, "car_rgb_ClearNight_auto_exposure", f.color);
-    for (auto& a : town.world.actors) a.lights_on = false;
+    for (auto& a : town.world.actors) a.light_state = 0;
   }
   // Motion blur: the car's camera 0.8 m on since its previous image (CARLA's intensity
   // 0.45; max_distortion 5 %, Unreal's default, so that it shows at this size).
@@ -115,7 +115,7 @@ int Samples(const std::string& dir) {
   }
   // DVS: events between two frames of the car driving 1 m on, red = brighter, blue = darker.
   town.world.weather = WeatherPreset("ClearNoon");
-  for (auto& a : town.world.actors) a.lights_on = false;
+  for (auto& a : town.world.actors) a.light_state = 0;
   DvsSensor dvs(DvsParams{}, kW, kH, 42);
   dvs.Update(r.RenderFrames({car}, town.world)[0].color.data(), 0);
   car.pose = car.pose * Pose{Vec3(1.0, 0, 0), Quat::Identity()};

@@ -1,5 +1,6 @@
 #include "ground_service.h"
 
+#include <algorithm>
 #include <chrono>
 
 #include "lockstep/map/scene.h"
@@ -24,6 +25,10 @@ std::string CarlaId(const std::string& bp) {
       {"vehicle.lockstep.motorbike", "vehicle.kawasaki.ninja"}};
   auto it = legacy.find(bp);
   return it == legacy.end() ? bp : it->second;
+}
+
+ground::LightWeather LightWeather(const msg::WeatherParameters& w) {
+  return ground::LightWeather{w.sun_altitude_angle(), w.precipitation(), w.fog_density()};
 }
 
 bool IsMine(const std::string& bp) {
@@ -56,6 +61,19 @@ GroundService::GroundService(Bus& bus, std::string name, std::string output_dir)
 
 std::vector<msg::BlueprintDeclaration> GroundService::Blueprints() const { return ground_wire::Blueprints(); }
 
+std::optional<std::pair<ground::Pose, ground::Vec3>> GroundService::Footprint(const msg::SpawnActor& s) const {
+  if (s.parent() != 0) return std::nullopt;  // attached: moves with its parent
+  const std::string bp = CarlaId(s.blueprint().to_string());
+  if (const auto* v = ground::FindVehicle(bp)) return std::make_pair(ToPose(s.transform()), v->half_extents);
+  if (const auto* w = ground::FindWalker(bp)) return std::make_pair(ToPose(s.transform()), ground::Vec3(w->radius, w->radius, w->height / 2));
+  return std::nullopt;
+}
+
+// CARLA refuses a vehicle or walker whose box overlaps another actor at the spawn transform
+// ("Spawn failed because of collision at spawn position"): try_spawn_actor returns None,
+// spawn_actor raises, a batch's SpawnActor response carries the error. The coordinator asks
+// us before it hands out an actor id; we answer from the state of our last step plus the
+// spawns we accepted that no tick has carried yet, so a refused spawn never becomes an actor.
 std::string GroundService::CheckSpawn(const msg::SpawnActor& s) const {
   const std::string bp = CarlaId(s.blueprint().to_string());
   if (bp == ground::kWalkerControllerBlueprint) {
@@ -66,6 +84,23 @@ std::string GroundService::CheckSpawn(const msg::SpawnActor& s) const {
   } catch (const std::exception& e) {
     return e.what();
   }
+  const auto fp = Footprint(s);
+  if (!fp || !world_) return {};
+  const std::string owner = s.owner().to_string();
+  if (!owner.empty() && owner != name_) return {};
+  std::string why = world_->CheckFree(fp->first, fp->second);
+  std::lock_guard<std::mutex> lock(reservations_mu_);
+  if (why.empty()) {
+    // The spawns accepted for the next tick take their spots too.
+    for (const auto& r : reservations_) {
+      if (ground::SpawnOverlaps(fp->first, fp->second, r.pose, r.half_extents)) {
+        why = "spawn point taken by a " + r.blueprint + " spawned for the next tick";
+        break;
+      }
+    }
+  }
+  if (!why.empty()) return "Spawn failed because of collision at spawn position (" + why + ")";
+  reservations_.push_back(Reservation{s.blueprint().to_string(), fp->first, fp->second, kReservationSteps});
   return {};
 }
 
@@ -98,7 +133,12 @@ void GroundService::BeginRun(const msg::WorldInfo& world) {
   if (s.max_substeps() > 0) physics_.max_substeps = static_cast<int>(s.max_substeps());
   seed_ = world.seed();
   log_.reset();
+  {
+    std::lock_guard<std::mutex> lock(reservations_mu_);
+    reservations_.clear();
+  }
   world_ = std::make_unique<ground::World>(town_, seed_, physics_);
+  world_->SetWeather(LightWeather(world.weather()));
   wait_for_air_ = false;
   for (const auto& r : world.required_services()) {
     if (r.to_string() == "air_sim") wait_for_air_ = true;
@@ -135,10 +175,11 @@ void GroundService::Spawn(const msg::SpawnActor& s) {
   std::string why;
   if (bp == ground::kWalkerControllerBlueprint) {
     why = world_->AddWalkerController(s.actor(), s.parent());
-  } else if (const auto* v = ground::FindVehicle(bp)) {
-    const ground::Pose pose = ToPose(s.transform());
-    why = world_->CheckFree(pose, v->half_extents);
-    if (why.empty()) why = world_->AddVehicle(s.actor(), bp, attrs, pose);
+  } else if (ground::FindVehicle(bp)) {
+    // Overlaps were refused in CheckSpawn, before the id was handed out; a spawn the tick
+    // carries is added whatever moved since (as CARLA's actor exists once spawned), so the
+    // state stays a function of the ticks alone.
+    why = world_->AddVehicle(s.actor(), bp, attrs, ToPose(s.transform()));
   } else if (ground::FindWalker(bp)) {
     why = world_->AddWalker(s.actor(), bp, attrs, ToPose(s.transform()));
   } else {
@@ -275,6 +316,7 @@ void GroundService::Apply(const msg::Command& c) {
                                                 t.red_time(), t.freeze()));
       return;
     }
+    case msg::CommandKind::CMD_SET_WEATHER: world_->SetWeather(LightWeather(b.weather())); return;
     case msg::CommandKind::CMD_PEDESTRIANS:
       if (b.pedestrians().seed_only()) {
         world_->SetPedestriansSeed(b.pedestrians().seed());
@@ -289,6 +331,7 @@ void GroundService::Apply(const msg::Command& c) {
       switch (t.parameter()) {
         case P::TM_AUTOPILOT: report(t.actor(), world_->SetAutopilot(t.actor(), t.value() != 0)); return;
         case P::TM_FORCE_LANE_CHANGE: report(t.actor(), world_->ForceLaneChange(t.actor(), t.value() != 0)); return;
+        case P::TM_UPDATE_VEHICLE_LIGHTS: report(t.actor(), world_->SetUpdateVehicleLights(t.actor(), t.value() != 0)); return;
         case P::TM_SET_PATH: {
           std::vector<ground::Vec3> path;
           for (const auto& p : t.path()) path.push_back(ToVec(p));
@@ -336,6 +379,22 @@ void GroundService::ExternalBodies(const msg::Tick& tick) {
 void GroundService::Step(const msg::Tick& tick) {
   if (!world_) throw InputError("ground_sim: a tick before the run began");
   pending_events_.clear();
+  {
+    // The spawns this tick carries were reserved by our checks; the others age.
+    std::lock_guard<std::mutex> lock(reservations_mu_);
+    for (const auto& c : tick.commands()) {
+      if (c.body()._d() != msg::CommandKind::CMD_SPAWN_ACTOR) continue;
+      const auto& sp = c.body().spawn_actor();
+      const ground::Pose pose = ToPose(sp.transform());
+      auto it = std::find_if(reservations_.begin(), reservations_.end(), [&](const Reservation& r) {
+        return r.blueprint == sp.blueprint().to_string() && r.pose.position == pose.position &&
+               r.pose.orientation.coeffs() == pose.orientation.coeffs();
+      });
+      if (it != reservations_.end()) reservations_.erase(it);
+    }
+    for (auto& r : reservations_) --r.steps_left;
+    std::erase_if(reservations_, [](const Reservation& r) { return r.steps_left <= 0; });
+  }
   for (const auto& c : tick.commands()) Apply(c);
   ExternalBodies(tick);
   world_->Step(tick.dt());

@@ -39,6 +39,9 @@ class GroundService final : public ServiceCore {
   void SpawnProp(const msg::SpawnActor& s, const std::string& bp);
   void Fail(uint32_t actor, const std::string& why);
   void LoadTown(const msg::WorldInfo& world);
+  // CARLA's collision check at spawn (docs/architecture.md, "Spawns the owner refuses"): the
+  // footprint a vehicle or walker spawn would take, "" when it takes none.
+  std::optional<std::pair<ground::Pose, ground::Vec3>> Footprint(const msg::SpawnActor& s) const;
   void ExternalBodies(const msg::Tick& tick);
   msg::GroundState PublishState(const msg::FrameStamp& stamp) const;
   msg::PhysicsEvents PublishEvents(const msg::FrameStamp& stamp) const;
@@ -61,6 +64,19 @@ class GroundService final : public ServiceCore {
   uint64_t seed_ = 0;
   bool wait_for_air_ = false;
   std::vector<msg::SimEvent> pending_events_;
+  // Spawns this service accepted in a SpawnCheck that no tick has carried yet: a later check
+  // collides with them as with the actors. Each expires after kReservationSteps steps
+  // without its spawn (a coordinator that did not send it after all). Checks run between
+  // steps (ServiceRunner), never during one.
+  struct Reservation {
+    std::string blueprint;
+    ground::Pose pose;
+    ground::Vec3 half_extents;
+    int steps_left = 0;
+  };
+  static constexpr int kReservationSteps = 3;
+  mutable std::mutex reservations_mu_;
+  mutable std::vector<Reservation> reservations_;
   Reader<msg::MapData> map_reader_;  // last: its callback uses the members above
 };
 

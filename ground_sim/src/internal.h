@@ -202,6 +202,7 @@ struct World::Impl {
   bool has_pedestrians_seed = false;     // a client sent set_pedestrians_seed
   uint64_t pedestrians_seed = 0;
   Rng tm_rng;                            // TM-wide draws (respawn points)
+  LightWeather weather;                  // what the TM's vehicle lights follow (saved)
 
   dWorldID world = nullptr;
   dSpaceID static_space = nullptr;
@@ -269,6 +270,9 @@ struct World::Impl {
   void AnchorPath(VehicleActor* v);
   void Respawn(VehicleActor* v);
   bool HybridKinematic(const VehicleActor& v) const;
+
+  // vehicle_lights.cpp
+  void StepVehicleLights();
 
   // walkers.cpp
   void StepWalkers(double dt);

@@ -12,8 +12,9 @@ namespace lockstep::ground {
 namespace {
 
 constexpr uint32_t kMagic = 0x47524E44;  // "GRND"
-constexpr uint32_t kVersion = 5;  // 2: every field written explicitly (no struct padding); 3: stop signs, contacts of the last step, crosswalks;
-                                   // 4: benchmark onsets, distance, off-road fraction, props; 5: pedestrians seed, walker graph routes
+constexpr uint32_t kVersion = 6;  // 2: every field written explicitly (no struct padding); 3: stop signs, contacts of the last step, crosswalks;
+                                   // 4: benchmark onsets, distance, off-road fraction, props; 5: pedestrians seed, walker graph routes;
+                                   // 6: the weather the TM's vehicle lights follow
 
 class Writer {
  public:
@@ -341,6 +342,7 @@ std::vector<uint8_t> World::Save() const {
   for (const auto& [a, b] : I.last_contacts) w.Pod(a), w.Pod(b);
   w.Pod<uint32_t>(static_cast<uint32_t>(I.props.size()));
   for (const auto& [id, p] : I.props) w.Pod(p->id), w.V(p->pose.position), w.Q(p->pose.orientation), w.V(p->half_extents);
+  w.Pod(I.weather.sun_altitude_angle), w.Pod(I.weather.precipitation), w.Pod(I.weather.fog_density);
   return std::move(w.out);
 }
 
@@ -452,6 +454,7 @@ std::unique_ptr<World> World::Restore(std::shared_ptr<const Town> town, const st
     const std::string err = world->AddProp(id, p, half);
     if (!err.empty()) throw std::runtime_error("ground state: " + err);
   }
+  r.Get(&I.weather.sun_altitude_angle), r.Get(&I.weather.precipitation), r.Get(&I.weather.fog_density);
   if (r.at != bytes.size()) throw std::runtime_error("ground state: trailing bytes");
   return world;
 }

@@ -428,29 +428,28 @@ uint64_t World::frame() const { return impl_->frame; }
 void World::SetPhysicsSettings(const PhysicsSettings& s) { impl_->settings = s; }
 const TmGlobal& World::TrafficManager() const { return impl_->tm; }
 
+bool SpawnOverlaps(const Pose& pose, const Vec3& half, const Pose& q, const Vec3& qh) {
+  // Separating axes of two yawed rectangles, with a 0.2 m margin; z overlap within 2 m.
+  if (std::abs(q.position.z() - pose.position.z()) > 2.0 + qh.z() + half.z()) return false;
+  const double yaw = pose.Yaw(), qy = q.Yaw();
+  const Eigen::Vector2d d = q.position.head<2>() - pose.position.head<2>();
+  const Eigen::Vector2d axes[4] = {{std::cos(yaw), std::sin(yaw)}, {-std::sin(yaw), std::cos(yaw)},
+                                   {std::cos(qy), std::sin(qy)}, {-std::sin(qy), std::cos(qy)}};
+  const Eigen::Vector2d a0 = axes[0], a1 = axes[1], b0 = axes[2], b1 = axes[3];
+  for (const auto& ax : axes) {
+    const double ra = std::abs(a0.dot(ax)) * half.x() + std::abs(a1.dot(ax)) * half.y() + 0.2;
+    const double rb = std::abs(b0.dot(ax)) * qh.x() + std::abs(b1.dot(ax)) * qh.y();
+    if (std::abs(d.dot(ax)) > ra + rb) return false;
+  }
+  return true;
+}
+
 std::string World::CheckFree(const Pose& pose, const Vec3& half) const {
-  const double yaw = pose.Yaw();
-  const Eigen::Vector2d c = pose.position.head<2>();
-  auto overlaps = [&](const Pose& q, const Vec3& qh) {
-    // Separating axes of two yawed rectangles, with a 0.2 m margin; z overlap within 2 m.
-    if (std::abs(q.position.z() - pose.position.z()) > 2.0 + qh.z() + half.z()) return false;
-    const double qy = q.Yaw();
-    const Eigen::Vector2d d = q.position.head<2>() - c;
-    const Eigen::Vector2d axes[4] = {{std::cos(yaw), std::sin(yaw)}, {-std::sin(yaw), std::cos(yaw)},
-                                     {std::cos(qy), std::sin(qy)}, {-std::sin(qy), std::cos(qy)}};
-    const Eigen::Vector2d a0 = axes[0], a1 = axes[1], b0 = axes[2], b1 = axes[3];
-    for (const auto& ax : axes) {
-      const double ra = std::abs(a0.dot(ax)) * half.x() + std::abs(a1.dot(ax)) * half.y() + 0.2;
-      const double rb = std::abs(b0.dot(ax)) * qh.x() + std::abs(b1.dot(ax)) * qh.y();
-      if (std::abs(d.dot(ax)) > ra + rb) return false;
-    }
-    return true;
-  };
   for (const auto& [id, v] : impl_->vehicles) {
-    if (overlaps(BodyPose(v->body), v->spec->half_extents)) return "spawn point occupied by vehicle " + std::to_string(id);
+    if (SpawnOverlaps(pose, half, BodyPose(v->body), v->spec->half_extents)) return "spawn point occupied by vehicle " + std::to_string(id);
   }
   for (const auto& [id, w] : impl_->walkers) {
-    if (overlaps(BodyPose(w->body), Vec3(w->spec->radius, w->spec->radius, w->spec->height / 2)))
+    if (SpawnOverlaps(pose, half, BodyPose(w->body), Vec3(w->spec->radius, w->spec->radius, w->spec->height / 2)))
       return "spawn point occupied by walker " + std::to_string(id);
   }
   return {};
@@ -736,6 +735,7 @@ void World::Step(double dt) {
   I.StepLights(dt);
   I.StepControllers(dt);
   I.StepTrafficManager(dt);  // sets the kinematic vehicles' motion and the TM cars' controls
+  I.StepVehicleLights();
   I.StepWalkers(dt);
   bool any_dynamic = false;
   for (auto& [id, v] : I.vehicles) any_dynamic |= !v->kinematic && v->simulate_physics;

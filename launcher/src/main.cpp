@@ -1,5 +1,7 @@
 // lockstep: the command-line front end.
 //   lockstep up <config.yaml>     start the coordinator and services of a simulation
+//   lockstep serve [--map Town01] the simulator a CARLA user starts: every built service on a
+//                                 map, free-running at real time, until Ctrl-C
 //   lockstep status               members, frame and tick rate of a running simulation
 //   lockstep map info <file>      statistics of an OpenDRIVE map (delegates to lockstep-map)
 //   lockstep python <script> ...  runs a Python script with `lockstep`, `carla` and `airsim`
@@ -11,6 +13,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <csignal>
+#include <cstdlib>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -24,6 +27,7 @@
 #include "lockstep/runtime/log.h"
 #include "lockstep/runtime/shm_sweep.h"
 #include "progress.h"
+#include "serve.h"
 #include "supervisor.h"
 
 namespace {
@@ -164,6 +168,37 @@ int Up(const std::string& config_file, int domain, bool with_coordinator) {
   return rc;
 }
 
+// Writes the server's launch config into a folder of its own and runs it as `up` does.
+int Serve(lockstep::launcher::ServeOptions o) {
+  namespace ll = lockstep::launcher;
+  const std::string build = std::filesystem::path(BinDir()).parent_path().string();
+  if (o.domain < 0) {
+    const char* env = std::getenv("LOCKSTEP_DOMAIN");
+    o.domain = env && *env ? std::atoi(env) : 0;
+  }
+  const std::string map_file = ll::FindMap(o.map, ll::MapSearchPath(build));
+  const auto services = ll::BuiltServices(build);
+  char dir_template[] = "/tmp/lockstep-serve-XXXXXX";
+  if (!mkdtemp(dir_template)) throw lockstep::InputError("lockstep serve: cannot create a folder in /tmp for the config");
+  const std::string config = std::string(dir_template) + "/serve.yaml";
+  {
+    std::ofstream out(config);
+    out << ll::ServeConfig(o, map_file, services);
+    if (!out) throw lockstep::InputError("lockstep serve: cannot write " + config);
+  }
+  std::string list;
+  for (const auto& s : services) list += (list.empty() ? "" : ", ") + s;
+  std::printf("lockstep serve: %s on DDS domain %d with %s; free-running at real time (dt %.3f s)\n", map_file.c_str(), o.domain,
+              list.c_str(), o.fixed_delta_seconds);
+  std::printf("lockstep serve: run CARLA or AirSim scripts with `LOCKSTEP_DOMAIN=%d lockstep python script.py`; Ctrl-C stops\n",
+              o.domain);
+  std::fflush(stdout);
+  const int rc = Up(config, o.domain, true);
+  std::error_code ec;
+  std::filesystem::remove_all(dir_template, ec);
+  return rc;
+}
+
 int Status(int domain, const std::string& profile, double wait_s, bool json) {
   auto bus = lockstep::CreateDdsBus({domain, "", profile, "lockstep-status"});
   std::mutex mu;
@@ -234,6 +269,17 @@ int main(int argc, char** argv) {
   bool no_coordinator = false;
   up->add_flag("--no-coordinator", no_coordinator, "start the services only: a script hosts the coordinator (lockstep.Coordinator)");
 
+  auto* serve = app.add_subcommand("serve", "the simulator a CARLA user starts: every built service on a map, "
+                                             "free-running at real time, until Ctrl-C");
+  lockstep::launcher::ServeOptions serve_options;
+  serve_options.domain = -1;
+  serve->add_option("--map", serve_options.map, "map name (<name>.xodr on the map path) or .xodr file")->capture_default_str();
+  serve->add_option("--domain", serve_options.domain, "DDS domain id (default $LOCKSTEP_DOMAIN, else 0)");
+  serve->add_option("--seed", serve_options.seed, "run seed")->capture_default_str();
+  serve->add_option("--fixed-delta-seconds", serve_options.fixed_delta_seconds, "s of simulated time per tick")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+
   auto* status = app.add_subcommand("status", "show a running simulation");
   int status_domain = 0;
   double wait_s = 3;
@@ -259,6 +305,7 @@ int main(int argc, char** argv) {
   std::signal(SIGTERM, OnSignal);
   try {
     if (*up) return Up(config_file, domain, !no_coordinator);
+    if (*serve) return Serve(serve_options);
     if (*status) return Status(status_domain, profile, wait_s, json);
     if (*map) {
       const std::string tool = BinDir() + "/lockstep-map";

@@ -292,6 +292,33 @@ void RenderService::BeginRun(const msg::WorldInfo& world) {
   spawned_.clear();
   cameras_.clear();
   previous_poses_.clear();
+  debug_.Clear();  // a new world: CARLA's persistent lines go with the old one
+}
+
+// world.debug shapes of a tick issued at `issued` (the frame before it, when the client
+// drew them). Strings and HUD shapes are for CARLA's spectator HUD, which no camera shows.
+void RenderService::AddDebugShapes(const msg::DebugDraw& d, uint64_t first_frame, double issued) {
+  for (const auto& s : d.shapes()) {
+    if (s.hud()) continue;
+    const render::DebugColor c{s.r(), s.g(), s.b()};
+    render::DebugDrawList list;
+    switch (s.kind()) {
+      case msg::DebugShapeKind::DEBUG_POINT:
+        debug_.AddPoint(render::DebugPoint{ToVec(s.begin()), s.size(), c}, first_frame, issued, s.life_time());
+        continue;
+      case msg::DebugShapeKind::DEBUG_LINE: list.lines.push_back({ToVec(s.begin()), ToVec(s.end()), s.size(), c}); break;
+      case msg::DebugShapeKind::DEBUG_ARROW: list.AddArrow(ToVec(s.begin()), ToVec(s.end()), s.size(), s.arrow_size(), c); break;
+      case msg::DebugShapeKind::DEBUG_BOX: {
+        msg::Pose p;
+        p.position(s.begin());
+        p.orientation(s.rotation());
+        list.AddBox(ToPose(p), ToVec(s.extent()), s.size(), c);
+        break;
+      }
+      case msg::DebugShapeKind::DEBUG_STRING: continue;
+    }
+    for (const auto& l : list.lines) debug_.AddLine(l, first_frame, issued, s.life_time());
+  }
 }
 
 bool RenderService::Mine(const msg::SpawnActor& s) const {
@@ -408,8 +435,8 @@ render::WorldView RenderService::BuildWorld(const msg::GroundState* ground, cons
                                             std::map<uint32_t, render::Pose>* poses, std::map<uint32_t, render::Pose>* mounts) {
   render::WorldView w;
   w.weather = weather_;
-  const bool night = render::ComputeLighting(weather_).night;
-  auto add = [&](uint32_t id, const std::string& blueprint, const render::Pose& pose, const render::Vec3& he, bool mount_at_bottom) {
+  auto add = [&](uint32_t id, const std::string& blueprint, const render::Pose& pose, const render::Vec3& he, bool mount_at_bottom,
+                 uint32_t light_state = 0) {
     (*poses)[id] = pose;
     (*mounts)[id] = mount_at_bottom ? pose * render::Pose{render::Vec3(0, 0, -he.z()), render::Quat::Identity()} : pose;
     auto it = spawned_.find(id);
@@ -423,11 +450,13 @@ render::WorldView RenderService::BuildWorld(const msg::GroundState* ground, cons
     auto color = s.attributes.find("color");
     auto rgb = color != s.attributes.end() ? ParseRgb(color->second) : std::nullopt;
     a.paint = rgb ? *rgb : render::DefaultPaint(id);
-    a.lights_on = night;
+    a.light_state = light_state;  // CARLA: a vehicle's lights are off until a client or the TM sets them
     w.actors.push_back(std::move(a));
   };
   if (ground) {
-    for (const auto& v : ground->vehicles()) add(v.actor(), v.blueprint().to_string(), ToPose(v.transform()), ToVec(v.half_extents()), true);
+    for (const auto& v : ground->vehicles()) {
+      add(v.actor(), v.blueprint().to_string(), ToPose(v.transform()), ToVec(v.half_extents()), true, v.light_state());
+    }
     for (const auto& v : ground->walkers()) add(v.actor(), v.blueprint().to_string(), ToPose(v.transform()), ToVec(v.half_extents()), true);
     for (const auto& t : ground->traffic_lights()) {
       render::TrafficLightDraw d;
@@ -485,7 +514,13 @@ void RenderService::Step(const msg::Tick& tick) {
   tick_stamp.run(tick.run());
   tick_stamp.frame(tick.frame());
   tick_stamp.sim_time(tick.sim_time());
-  for (const auto& c : tick.commands()) Apply(c, tick_stamp);
+  for (const auto& c : tick.commands()) {
+    if (c.body()._d() == msg::CommandKind::CMD_DEBUG_DRAW) {
+      AddDebugShapes(c.body().debug_draw(), tick.frame(), tick.sim_time() - tick.dt());
+    } else {
+      Apply(c, tick_stamp);
+    }
+  }
   if (replaying() || cameras_.empty() || world_.settings().no_rendering_mode()) return;
   // The frame whose state the images show: this tick's (strict) or the previous (pipelined).
   const uint64_t k = PerceptionFrame(world_.settings().perception_mode(), tick.frame());
@@ -505,6 +540,7 @@ void RenderService::Step(const msg::Tick& tick) {
   }
   std::map<uint32_t, render::Pose> poses, mounts;
   render::WorldView world = BuildWorld(ground ? &*ground : nullptr, air ? &*air : nullptr, stamp.sim_time(), &poses, &mounts);
+  world.debug = debug_.Visible(k, stamp.sim_time());
   // Cameras due now, grouped: cameras with one pose and one lens share a pass.
   struct Pass {
     render::Camera camera;

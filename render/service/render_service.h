@@ -56,6 +56,7 @@ class RenderService final : public ServiceCore {
   struct CameraRecord;
 
   void Apply(const msg::Command& c, const msg::FrameStamp& stamp);
+  void AddDebugShapes(const msg::DebugDraw& d, uint64_t first_frame, double issued);
   void LoadTown(const msg::WorldInfo& world);
   bool Mine(const msg::SpawnActor& s) const;
   void Fail(const msg::FrameStamp& stamp, uint32_t actor, const std::string& why);
@@ -88,6 +89,7 @@ class RenderService final : public ServiceCore {
   std::map<uint32_t, Spawned> spawned_;                      // every actor spawned in the run
   std::map<uint32_t, std::unique_ptr<CameraRecord>> cameras_;  // the cameras this process owns
   std::map<uint32_t, render::Pose> previous_poses_;         // actor poses of the last rendered frame
+  render::DebugShapes debug_;                               // world.debug shapes of the run
   Reader<msg::MapData> map_reader_;  // last: its callback uses the members above
 };
 

@@ -117,6 +117,8 @@ struct Renderer::Impl {
   // Scene and sky programs per feature set (FEATURE_* defines), compiled on first use.
   std::map<std::uint32_t, std::pair<gl::Program, gl::Program>> programs;
   gl::Program shadow;
+  gl::Program debug;  // world.debug shapes
+  GLuint debug_vao = 0, debug_vbo = 0;
   gl::Program* scene_ptr = nullptr;
   GLuint sky_vao = 0;
   StaticScene statics;
@@ -153,6 +155,16 @@ struct Renderer::Impl {
     Programs(0);  // labels only
     Programs(kFeatureColor);
     shadow = gl::Program(gl::BuildProgram(shaders::kShadowVertex, shaders::kShadowFragment, "shadow"));
+    debug = gl::Program(gl::BuildProgram(shaders::kDebugVertex, shaders::kDebugFragment, "debug"));
+    glGenVertexArrays(1, &debug_vao);
+    glGenBuffers(1, &debug_vbo);
+    glBindVertexArray(debug_vao);
+    glBindBuffer(GL_ARRAY_BUFFER, debug_vbo);
+    glEnableVertexAttribArray(0);
+    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, sizeof(DebugVertex), reinterpret_cast<void*>(0));
+    glEnableVertexAttribArray(1);
+    glVertexAttribPointer(1, 4, GL_FLOAT, GL_FALSE, sizeof(DebugVertex), reinterpret_cast<void*>(3 * sizeof(float)));
+    glBindVertexArray(0);
     glGenVertexArrays(1, &sky_vao);
     glGenVertexArrays(1, &model_vao);
     glGenBuffers(1, &model_vbo);
@@ -229,6 +241,9 @@ struct Renderer::Impl {
     glDeleteTextures(1, &static_shadow_tex);
     glDeleteBuffers(1, &model_vbo);
     glDeleteVertexArrays(1, &model_vao);
+    glDeleteBuffers(1, &debug_vbo);
+    glDeleteVertexArrays(1, &debug_vao);
+    glDeleteProgram(debug.id());
     glDeleteVertexArrays(1, &sky_vao);
     for (auto& [mask, p] : programs) {
       glDeleteProgram(p.first.id());
@@ -466,6 +481,28 @@ struct Renderer::Impl {
       SetDrawBuffers(cam.outputs);
       DrawPass(cam, world, l, shadow_vp, Programs(ColourFeatures(cam, l, shadow_vp.has_value()) | outputs), true);
     }
+    if ((cam.outputs & kOutColor) && !world.debug.empty()) DrawDebug(cam, world.debug);
+  }
+
+  // world.debug shapes over the colour output, hidden where the scene is nearer.
+  void DrawDebug(const Camera& cam, const DebugDrawList& list) {
+    const std::vector<DebugVertex> v = DebugTriangles(list, cam);
+    if (v.empty()) return;
+    SetDrawBuffers(kOutColor);
+    glEnable(GL_DEPTH_TEST);
+    glDepthFunc(GL_LEQUAL);
+    glDepthMask(GL_FALSE);
+    glDisable(GL_CULL_FACE);
+    debug.Use();
+    debug.Set("u_view_proj", (ProjectionMatrix(cam) * ViewMatrix(cam.pose)).eval());
+    glBindVertexArray(debug_vao);
+    glBindBuffer(GL_ARRAY_BUFFER, debug_vbo);
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(v.size() * sizeof(DebugVertex)), v.data(), GL_STREAM_DRAW);
+    glDrawArrays(GL_TRIANGLES, 0, static_cast<GLsizei>(v.size()));
+    ++stats.draw_calls;
+    glBindVertexArray(0);
+    glDepthMask(GL_TRUE);
+    glEnable(GL_CULL_FACE);
   }
 
   // For a pass without colour and flow (whose sky values are constants): clears the bound
@@ -517,7 +554,7 @@ struct Renderer::Impl {
     scene.Set("u_model", Eigen::Matrix4f::Identity().eval());
     scene.Set("u_prev_model", Eigen::Matrix4f::Identity().eval());
     scene.SetUint("u_instance", 0);
-    scene.SetInt("u_lights_on", 0);
+    scene.SetInt("u_lights", 0);
     scene.SetInt("u_light_state", 3);
     const Frustum fr(vp);
     const Eigen::Vector3f eye = cam.pose.position.cast<float>();
@@ -558,7 +595,7 @@ struct Renderer::Impl {
       }
       std::vector<std::pair<double, const ActorDraw*>> cars;
       for (const ActorDraw& a : world.actors) {
-        if (!a.lights_on) continue;
+        if (!(a.light_state & (light::kLowBeam | light::kHighBeam))) continue;
         cars.emplace_back((a.pose.position - cam.pose.position).squaredNorm(), &a);
       }
       std::sort(cars.begin(), cars.end(), [](const auto& a, const auto& b) { return a.first < b.first; });
@@ -601,7 +638,7 @@ struct Renderer::Impl {
       scene.Set("u_prev_model", prev);
       scene.Set("u_paint", Eigen::Vector3f(a.paint[0] / 255.0f, a.paint[1] / 255.0f, a.paint[2] / 255.0f));
       scene.SetUint("u_instance", a.id);
-      scene.SetInt("u_lights_on", a.lights_on ? 1 : 0);
+      scene.SetInt("u_lights", static_cast<int>(a.light_state & 0x7fffffffu));
       const GLsizei body = static_cast<GLsizei>(m.rotors.empty() ? m.vertices.size() : m.rotors.front().first);
       glDrawArrays(GL_TRIANGLES, it->second.first, body);
       stats.triangles += static_cast<std::uint64_t>(body) / 3;

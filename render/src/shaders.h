@@ -153,7 +153,7 @@ in vec4 v_prev_clip;
 #endif
 in float v_depth;
 uniform uint u_instance;
-uniform bool u_lights_on;
+uniform int u_lights;         // vehicle: carla.VehicleLightState bits
 uniform int u_light_state;   // traffic light: 0 red, 1 yellow, 2 green, 3 off
 uniform float u_wetness;
 uniform float u_puddles;
@@ -220,9 +220,18 @@ void main() {
 #endif
     }
   }
+  // Vehicle lamps by carla.VehicleLightState bits: head lamps with the low or high beam
+  // (dim with the position lights alone), tail lamps bright with the brake, dim with the
+  // position lights or beams.
+  if (mat == 3u) {
+    if ((u_lights & 6) != 0) emissive = vec3(6.0, 5.6, 4.5) * ((u_lights & 4) != 0 ? 1.4 : 1.0);
+    else if ((u_lights & 1) != 0) emissive = vec3(1.2, 1.1, 0.9);
+  }
+  if (mat == 4u) {
+    if ((u_lights & 8) != 0) emissive = vec3(6.0, 0.15, 0.15);
+    else if ((u_lights & 7) != 0) emissive = vec3(2.0, 0.07, 0.07);
+  }
 #ifdef FEATURE_NIGHT
-  if (mat == 3u && u_lights_on) emissive = vec3(6.0, 5.6, 4.5);
-  if (mat == 4u && u_lights_on) emissive = vec3(3.0, 0.1, 0.1);
   if (mat == 6u) emissive = vec3(8.0, 6.5, 4.0);
 #endif
   if (mat >= 7u && mat <= 9u) {
@@ -314,6 +323,25 @@ void main() {
   o_color = vec4(Finish(c, gl_FragCoord.xy).bgr, 1.0);
 #endif
 }
+)";
+
+// world.debug shapes (debug_draw.h): unlit triangles in their own colour, depth-tested
+// against the scene, into the colour output only.
+inline constexpr const char* kDebugVertex = R"(#version 330 core
+layout(location = 0) in vec3 a_pos;
+layout(location = 1) in vec4 a_color;
+uniform mat4 u_view_proj;
+out vec4 v_color;
+void main() {
+  v_color = a_color;
+  gl_Position = u_view_proj * vec4(a_pos, 1.0);
+}
+)";
+
+inline constexpr const char* kDebugFragment = R"(#version 330 core
+in vec4 v_color;
+layout(location = 0) out vec4 o_color;
+void main() { o_color = vec4(v_color.bgr, 1.0); }  // stored B, G, R, A as the scene's
 )";
 
 inline constexpr const char* kShadowVertex = R"(#version 330 core

@@ -196,11 +196,82 @@ TEST_F(GroundServiceTest, RejectsWhatItCannotApplyWithAReason) {
   msg::CommandBody cb;
   cb.vehicle_control(c);
   ASSERT_TRUE(Send(cb).accepted());
-  const uint32_t twin = Spawn("vehicle.audi.tt", SpawnPose(1, 0.693));
   Tick(2);
   EXPECT_TRUE(WaitFailure("autopilot"));
-  EXPECT_TRUE(WaitFailure("occupied"));
-  EXPECT_FALSE(Vehicle(observer_->last_frame(), twin).has_value());
+}
+
+// CARLA refuses a spawn whose box overlaps an actor ("Spawn failed because of collision at
+// spawn position"): the reply says so and no actor id is handed out, whether the other
+// actor is in the state already or only spawned for the next tick (a batch, or two
+// try_spawn_actor calls before a tick).
+TEST_F(GroundServiceTest, ASpawnOnAnOccupiedSpawnPointIsRefusedBeforeItGetsAnId) {
+  const uint32_t car = Spawn("vehicle.audi.tt", SpawnPose(1, 0.693));
+  auto twin = Send(SpawnBody("vehicle.audi.tt", SpawnPose(1, 0.693)));
+  EXPECT_FALSE(twin.accepted()) << "the first car is not in any state yet: only its spawn is pending";
+  EXPECT_NE(twin.reason().to_string().find("Spawn failed because of collision at spawn position"), std::string::npos) << twin.reason();
+  EXPECT_EQ(twin.actor(), 0u);
+  auto walker = Send(SpawnBody("walker.pedestrian.0001", SpawnPose(1, 0.9)));
+  EXPECT_FALSE(walker.accepted()) << "a walker inside the car";
+  Tick(2);
+  const uint64_t frame = observer_->last_frame();
+  ASSERT_TRUE(Vehicle(frame, car).has_value());
+  EXPECT_EQ(State(frame)->vehicles().size(), 1u) << "no ghost: exactly the accepted car";
+  twin = Send(SpawnBody("vehicle.audi.tt", SpawnPose(1, 0.693)));
+  EXPECT_FALSE(twin.accepted()) << "the car is in the state now";
+  EXPECT_NE(twin.reason().to_string().find("collision at spawn position"), std::string::npos) << twin.reason();
+  // Another spawn point is free; and the spot is free again once the car is gone.
+  EXPECT_TRUE(Send(SpawnBody("vehicle.audi.tt", SpawnPose(2, 0.693))).accepted());
+  msg::DestroyActor d;
+  d.actor(car);
+  msg::CommandBody db;
+  db.destroy_actor(d);
+  ASSERT_TRUE(Send(db).accepted());
+  Tick(1);
+  EXPECT_TRUE(Send(SpawnBody("vehicle.audi.tt", SpawnPose(1, 0.693))).accepted());
+}
+
+// TrafficManager.update_vehicle_lights: CARLA's light stage sets the lights of a TM car
+// from the weather (night: position and low beams; fog: fog lights too) and its brake; a
+// car without it keeps its lights off.
+TEST_F(GroundServiceTest, TheTrafficManagerDrivesTheLightsOfTheCarsItWasAskedTo) {
+  const uint32_t lit = Spawn("vehicle.lincoln.mkz_2020", SpawnPose(5, 0.757));
+  const uint32_t dark = Spawn("vehicle.lincoln.mkz_2020", SpawnPose(20, 0.757));
+  auto tm = [&](msg::TrafficManagerParameter p, uint32_t actor, double value) {
+    msg::TrafficManagerCommand c;
+    c.parameter(p);
+    c.actor(actor);
+    c.value(value);
+    msg::CommandBody b;
+    b.traffic_manager(c);
+    ASSERT_TRUE(Send(b).accepted());
+  };
+  tm(msg::TrafficManagerParameter::TM_AUTOPILOT, lit, 1);
+  tm(msg::TrafficManagerParameter::TM_AUTOPILOT, dark, 1);
+  tm(msg::TrafficManagerParameter::TM_UPDATE_VEHICLE_LIGHTS, lit, 1);
+  auto weather = [&](float sun, float fog) {
+    msg::WeatherParameters w;
+    w.sun_altitude_angle(sun);
+    w.fog_density(fog);
+    w.fog_distance(0);
+    msg::CommandBody b;
+    b.weather(w);
+    ASSERT_TRUE(Send(b).accepted());
+  };
+  constexpr uint32_t kPosition = 0x1, kLowBeam = 0x2, kFog = 0x80;
+  weather(60, 0);  // noon
+  Tick(3);
+  EXPECT_EQ(Vehicle(observer_->last_frame(), lit)->light_state() & (kPosition | kLowBeam), 0u);
+  weather(-30, 0);  // night
+  Tick(3);
+  EXPECT_EQ(Vehicle(observer_->last_frame(), lit)->light_state() & (kPosition | kLowBeam | kFog), kPosition | kLowBeam);
+  EXPECT_EQ(Vehicle(observer_->last_frame(), dark)->light_state(), 0u) << "not asked: CARLA leaves them off";
+  weather(60, 50);  // fog by day
+  Tick(3);
+  EXPECT_EQ(Vehicle(observer_->last_frame(), lit)->light_state() & (kPosition | kLowBeam | kFog), kPosition | kLowBeam | kFog);
+  tm(msg::TrafficManagerParameter::TM_UPDATE_VEHICLE_LIGHTS, lit, 0);
+  weather(-30, 0);
+  Tick(3);
+  EXPECT_EQ(Vehicle(observer_->last_frame(), lit)->light_state() & kFog, kFog) << "turned off: the lights stay as the TM left them";
 }
 
 TEST_F(GroundServiceTest, TheTrafficManagerDrivesAHandedOverCarAndGivesItBack) {

@@ -17,7 +17,7 @@ CameraFrame Shot(const Weather& weather, bool night_lights = false, double car_y
   WorldView w;
   w.weather = weather;
   w.actors.push_back(Vehicle(r, 10, At(20, -2, 0.75, car_yaw)));
-  w.actors.back().lights_on = night_lights;
+  w.actors.back().light_state = night_lights ? light::kPosition | light::kLowBeam : 0u;
   w.actors.push_back(Walker(r, 11, At(15, 5.5, 1.05), 7));
   const Camera cam = Cam(96, 64, 90, At(0, 0, 2.0, 15, -5), kOutColor | kOutLabels);
   return r.RenderFrames({cam}, w)[0];

@@ -59,7 +59,7 @@ struct TmVehicleParams {
   double keep_right_percentage = kUnset;
   double random_left_lanechange_percentage = kUnset;
   double random_right_lanechange_percentage = kUnset;
-  bool update_lights = true;                  // vehicle lights follow the TM (accepted)
+  bool update_lights = false;                 // update_vehicle_lights: the TM drives its lights (CARLA: off)
 };
 
 // The TM parameter names accepted by World::SetTrafficManager (CARLA's setter names).

@@ -97,6 +97,20 @@ struct LightView {
   std::string opendrive_id;
 };
 
+// What the Traffic Manager's vehicle lights follow (carla.WeatherParameters fields).
+struct LightWeather {
+  double sun_altitude_angle = 45;  // deg
+  double precipitation = 0;        // 0..100
+  double fog_density = 0;          // 0..100
+};
+// CARLA's light stage: the light bits a TM vehicle with update_vehicle_lights gets from
+// `current` under `weather` with the TM's brake command `brake`.
+uint32_t TmLightState(uint32_t current, const LightWeather& weather, double brake);
+
+// The spawn check's overlap test: the box `half` at `pose` (with a 0.2 m margin) against the
+// box `other_half` at `other` (yawed rectangles; heights within 2 m).
+bool SpawnOverlaps(const Pose& pose, const Vec3& half, const Pose& other, const Vec3& other_half);
+
 // Another simulator's body (a drone from air_sim, Jacobi: its pose of the previous frame).
 struct ExternalBody {
   uint32_t id = 0;
@@ -149,6 +163,11 @@ class World {
   std::string SetVehiclePhysics(uint32_t id, const VehiclePhysics& p);
   std::optional<VehiclePhysics> GetVehiclePhysics(uint32_t id) const;
   std::string SetLightState(uint32_t vehicle, uint32_t bits);
+  // TrafficManager.update_vehicle_lights: the TM sets the vehicle's lights each step
+  // (TmLightState) while it drives it.
+  std::string SetUpdateVehicleLights(uint32_t vehicle, bool on);
+  // The weather the TM's vehicle lights follow (part of the state).
+  void SetWeather(const LightWeather& weather);
 
   // Traffic lights by actor id (1..n).
   std::string SetTrafficLight(uint32_t id, std::optional<LightColor> color, double green, double yellow, double red,

@@ -14,6 +14,7 @@
 #include "lockstep/map/mesh.h"
 #include "lockstep/map/scene.h"
 #include "lockstep/render/camera.h"
+#include "lockstep/render/debug_draw.h"
 #include "lockstep/render/gl_context.h"
 #include "lockstep/render/models.h"
 #include "lockstep/render/weather.h"
@@ -36,10 +37,15 @@ struct ActorDraw {
   Pose pose;                      // world, centre of the bounding box
   std::optional<Pose> previous_pose;  // for optical flow
   std::array<std::uint8_t, 3> paint{200, 200, 200};
-  bool lights_on = false;         // head and tail lights (on at night when unset by a client)
+  std::uint32_t light_state = 0;  // vehicles: carla.VehicleLightState bits (light:: below); 0 = all off
   std::vector<double> rotor_angles;  // rad, one per rotor of the model
   bool cull_faces = true;         // false for imported assets of unknown winding
 };
+
+// carla.VehicleLightState bits the vehicle models show.
+namespace light {
+inline constexpr std::uint32_t kPosition = 0x1, kLowBeam = 0x2, kHighBeam = 0x4, kBrake = 0x8;
+}
 
 struct TrafficLightDraw {
   std::uint32_t id = 0;           // traffic light actor id (instance id of its lamps)
@@ -52,6 +58,7 @@ struct WorldView {
   Weather weather;
   std::vector<ActorDraw> actors;
   std::vector<TrafficLightDraw> traffic_lights;
+  DebugDrawList debug;  // world.debug shapes: drawn into the colour output only
 };
 
 // Read-back outputs of one camera. Pointers are valid only during the sink call; those

@@ -1,8 +1,56 @@
 #include "wire.h"
 
+#include <charconv>
+#include <initializer_list>
+#include <type_traits>
+
 #include "lockstep/runtime/blueprint_builder.h"
 
 namespace lockstep::ground_wire {
+namespace {
+
+// Numbers as the shortest text that reads back exactly, separated by spaces.
+std::string Numbers(std::initializer_list<double> values) {
+  std::string out;
+  char buf[32];
+  for (double v : values) {
+    auto [end, ec] = std::to_chars(buf, buf + sizeof buf, v);
+    if (!out.empty()) out += ' ';
+    out.append(buf, ec == std::errc() ? end : buf);
+  }
+  return out;
+}
+
+// The physics ground_sim simulates a vehicle blueprint with from its spawn on, as hidden
+// attributes ('_physics.*', which the carla package does not list): a client answers
+// get_physics_control() before the vehicle's first state, as CARLA does at once.
+void DeclarePhysics(const ground::VehiclePhysics& p, std::vector<msg::AttributeDeclaration>* attrs) {
+  namespace bp = blueprint;
+  std::string curve, gears;
+  auto append = [](std::string* out, const std::string& more) {
+    if (!out->empty()) out->push_back(' ');
+    out->append(more);
+  };
+  for (auto [rpm, nm] : p.torque_curve) append(&curve, Numbers({rpm, nm}));
+  for (const auto& g : p.forward_gears) append(&gears, Numbers({g.ratio, g.down_ratio, g.up_ratio}));
+  attrs->push_back(bp::String("_physics.engine",
+                              Numbers({p.max_rpm, p.moi, p.damping_rate_full_throttle, p.use_gear_autobox ? 1.0 : 0.0,
+                                       p.gear_switch_time, p.clutch_strength, p.final_ratio}),
+                              {}, false, false));
+  attrs->push_back(bp::String("_physics.torque_curve", curve, {}, false, false));
+  attrs->push_back(bp::String("_physics.gears", gears, {}, false, false));
+  attrs->push_back(bp::String("_physics.body",
+                              Numbers({p.mass, p.drag_coefficient, p.center_of_mass.x(), p.center_of_mass.y(),
+                                       p.center_of_mass.z()}),
+                              {}, false, false));
+  attrs->push_back(bp::String("_physics.wheels",
+                              Numbers({p.tire_friction, p.wheel_radius, p.max_steer_angle, p.max_brake_torque,
+                                       p.max_handbrake_torque, p.suspension_stiffness, p.suspension_damping, p.wheelbase,
+                                       p.track}),
+                              {}, false, false));
+}
+
+}  // namespace
 
 ground::Vec3 ToVec(const msg::Vector3& v) { return {v.x(), v.y(), v.z()}; }
 msg::Vector3 FromVec(const ground::Vec3& v) {
@@ -246,6 +294,7 @@ std::vector<msg::BlueprintDeclaration> Blueprints() {
     if (v.base_type == ground::BaseType::kBicycle || v.base_type == ground::BaseType::kMotorcycle) {
       attrs.push_back(bp::String("driver_id", "0", {"0", "1", "2"}));
     }
+    DeclarePhysics(v.physics, &attrs);
     out.push_back(bp::Make(v.id, msg::ActorKind::ACTOR_VEHICLE, std::move(attrs), {}, v.half_extents.x(),
                            v.half_extents.y(), v.half_extents.z()));
   }
@@ -253,14 +302,24 @@ std::vector<msg::BlueprintDeclaration> Blueprints() {
     char walk[32], run[32];
     std::snprintf(walk, sizeof walk, "%.2f", w.walk_speed);
     std::snprintf(run, sizeof run, "%.2f", w.run_speed);
+    // CARLA's walker speed: a float whose recommended values are standing, walking and
+    // running; the first is the default (0 = the AI controller's walking speed here).
+    msg::AttributeDeclaration speed = bp::Float("speed", 0.0, 0.0, 10.0);
+    speed.default_value("0.0");
+    {
+      std::remove_cvref_t<decltype(speed.recommended_values())> rec;
+      for (const char* r : {"0.0", static_cast<const char*>(walk), static_cast<const char*>(run)}) rec.emplace_back(r);
+      speed.recommended_values(rec);
+    }
     std::vector<msg::AttributeDeclaration> attrs = {
         bp::String("role_name", "walker"),
         bp::Bool("is_invincible", true),
-        bp::String("speed", walk, {walk, run}),
+        speed,
         bp::String("gender", w.gender, {"male", "female"}, false, false),
         bp::String("age", w.age, {"adult", "child"}, false, false),
         bp::Int("generation", w.generation, w.generation, w.generation, false),
         bp::Bool("can_use_wheelchair", false, false),
+        bp::Bool("use_wheelchair", false),
         bp::Float("height", w.height, w.height, w.height, false),
         bp::Float("width", 2 * w.radius, 2 * w.radius, 2 * w.radius, false),
     };

@@ -73,6 +73,11 @@ VehicleSpec TwoWheel(std::string id, BaseType type, Vec3 half, double mass, doub
   return s;
 }
 
+VehicleSpec SixWheel(VehicleSpec s) {
+  s.wheels = 6;  // declared as CARLA's; simulated on ground_sim's four-wheel model
+  return s;
+}
+
 std::vector<VehicleSpec> BuildVehicles() {
   using B = BaseType;
   std::vector<VehicleSpec> v = {
@@ -96,6 +101,12 @@ std::vector<VehicleSpec> BuildVehicles() {
       Car("vehicle.nissan.patrol_2021", {2.782, 1.074, 1.044}, 2700, 560, 2),
       Car("vehicle.seat.leon", {2.096, 0.920, 0.738}, 1300, 300, 1),
       Car("vehicle.toyota.prius", {2.257, 1.007, 0.763}, 1400, 280, 1, "electric"),
+      // The rest of CARLA 0.9.15's and 0.9.16's catalogue (their generation 1 twins and new models).
+      Car("vehicle.dodge.charger_police", {2.487, 1.019, 0.777}, 1900, 500, 1, "emergency"),
+      Car("vehicle.mercedes.coupe", {2.512, 1.076, 0.828}, 1700, 400, 1),
+      Car("vehicle.mini.cooper_s", {1.905, 0.985, 0.737}, 1250, 280, 1),
+      Car("vehicle.nissan.patrol", {2.305, 0.962, 0.928}, 2600, 540, 1),
+      Car("vehicle.micro.microlino", {1.203, 0.742, 0.700}, 513, 90, 1, "electric"),
       Big("vehicle.tesla.cybertruck", B::kTruck, {3.136, 1.194, 1.049}, 3000, 900, 1, "electric"),
       Big("vehicle.carlamotors.carlacola", B::kTruck, {2.602, 1.308, 1.233}, 6000, 1200, 1),
       Big("vehicle.carlamotors.firetruck", B::kTruck, {4.234, 1.426, 1.916}, 12000, 2200, 2, "emergency"),
@@ -104,6 +115,8 @@ std::vector<VehicleSpec> BuildVehicles() {
       Big("vehicle.volkswagen.t2", B::kVan, {2.240, 1.035, 1.021}, 1700, 300, 1),
       Big("vehicle.volkswagen.t2_2021", B::kVan, {2.204, 0.897, 1.020}, 1800, 350, 2),
       Big("vehicle.mitsubishi.fusorosa", B::kBus, {5.136, 1.921, 1.961}, 11000, 2000, 2),
+      Big("vehicle.carlamotors.european_hgv", B::kTruck, {4.070, 1.490, 1.910}, 9000, 2000, 2),
+      SixWheel(Big("vehicle.sixwheeltruck.sixwheeltruck", B::kTruck, {4.200, 1.300, 1.900}, 12000, 2200, 2)),
       TwoWheel("vehicle.harley-davidson.low_rider", B::kMotorcycle, {1.178, 0.382, 0.638}, 400, 130),
       TwoWheel("vehicle.kawasaki.ninja", B::kMotorcycle, {1.016, 0.402, 0.572}, 350, 110),
       TwoWheel("vehicle.yamaha.yzf", B::kMotorcycle, {1.104, 0.434, 0.625}, 350, 110),

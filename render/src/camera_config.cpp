@@ -41,6 +41,25 @@ std::vector<AttributeSpec> Rgb() {
   v.push_back(F("motion_blur_max_distortion", 0.35, 0, 100));
   v.push_back(F("motion_blur_min_object_screen_size", 0.1, 0, 1));
   v.push_back(B("enable_postprocess_effects", true));
+  // CARLA's other post-process attributes and defaults (bloom, lens flare, depth of field,
+  // tone mapper, white balance, chromatic aberration): declared, so scripts can set them;
+  // the renderer does not simulate these effects (docs/render.md).
+  v.push_back(F("bloom_intensity", 0.675, 0, 100));
+  v.push_back(F("lens_flare_intensity", 0.1, 0, 100));
+  v.push_back(F("min_fstop", 1.2, 0.1, 64));
+  v.push_back(I("blade_count", 5, 4, 16));
+  v.push_back(F("focal_distance", 1000, 0, 1e8));
+  v.push_back(F("blur_amount", 1, 0, 100));
+  v.push_back(F("blur_radius", 0, 0, 100));
+  v.push_back(F("slope", 0.88, 0, 1));
+  v.push_back(F("toe", 0.55, 0, 1));
+  v.push_back(F("shoulder", 0.26, 0, 1));
+  v.push_back(F("black_clip", 0, 0, 1));
+  v.push_back(F("white_clip", 0.04, 0, 1));
+  v.push_back(F("temp", 6500, 1500, 15000));
+  v.push_back(F("tint", 0, -1, 1));
+  v.push_back(F("chromatic_aberration_intensity", 0, 0, 1e4));
+  v.push_back(F("chromatic_aberration_offset", 0, 0, 1));
   return v;
 }
 std::vector<AttributeSpec> With(std::vector<AttributeSpec> v, const std::vector<AttributeSpec>& more) {

@@ -97,6 +97,11 @@ msg::BlueprintDeclaration Make(const std::string& id, msg::ActorKind kind,
   e.y(half_y);
   e.z(half_z);
   b.half_extents(e);
+  // CARLA: every modifiable attribute (an actor variation) has recommended values, the first
+  // one its default; declarations that give none recommend their default.
+  for (auto& a : attributes) {
+    if (a.modifiable() && a.recommended_values().empty()) SetRecommended(a, {a.default_value().to_string()});
+  }
   b.attributes(std::move(attributes));
   return b;
 }

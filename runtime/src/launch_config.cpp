@@ -35,8 +35,10 @@ std::vector<std::string> LaunchConfig::RequiredServices() const {
 
 void ValidateWorldSettings(const msg::WorldSettings& s, const std::string& where) {
   auto bad = [&](const std::string& what) { throw InputError(where + ": " + what); };
-  if (!std::isfinite(s.fixed_delta_seconds()) || s.fixed_delta_seconds() <= 0 || s.fixed_delta_seconds() > 1.0) {
-    bad("fixed_delta_seconds must be in (0, 1] s, got " + std::to_string(s.fixed_delta_seconds()));
+  // Any finite positive step, as CARLA accepts (a step above max_substep_delta_time x
+  // max_substeps only makes ground_sim's sub-steps longer, as CARLA warns).
+  if (!std::isfinite(s.fixed_delta_seconds()) || s.fixed_delta_seconds() <= 0) {
+    bad("fixed_delta_seconds must be a finite number > 0 s, got " + std::to_string(s.fixed_delta_seconds()));
   }
   if (!std::isfinite(s.real_time_factor()) || s.real_time_factor() < 0) {
     bad("real_time_factor must be >= 0 (0 = as fast as possible), got " + std::to_string(s.real_time_factor()));

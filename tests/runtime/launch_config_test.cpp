@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <limits>
 
 namespace lockstep {
 namespace {
@@ -76,9 +77,22 @@ TEST(LaunchConfig, BadServiceEntriesAreNamed) {
 }
 
 TEST(LaunchConfig, OutOfRangeWorldSettingsAreRejected) {
-  EXPECT_NE(ErrorOf("world:\n  fixed_delta_seconds: 0\n").find("fixed_delta_seconds must be in (0, 1]"), std::string::npos);
+  EXPECT_NE(ErrorOf("world:\n  fixed_delta_seconds: 0\n").find("fixed_delta_seconds must be a finite number > 0"), std::string::npos);
   EXPECT_NE(ErrorOf("world:\n  perception_mode: lazy\n").find("'strict' or 'pipelined'"), std::string::npos);
   EXPECT_NE(ErrorOf("domain_id: 300\n").find("domain_id"), std::string::npos);
+}
+
+// Issue 19: CARLA accepts any positive fixed_delta_seconds (lidar_to_camera.py sets 3.0; it
+// only warns when the step exceeds max_substep_delta_time x max_substeps).
+TEST(LaunchConfig, StepsLongerThanOneSecondAreAcceptedAsCarlaDoes) {
+  EXPECT_EQ(ErrorOf("world:\n  fixed_delta_seconds: 3.0\n"), "");
+  msg::WorldSettings s = DefaultWorldSettings();
+  s.fixed_delta_seconds(3.0);
+  EXPECT_NO_THROW(ValidateWorldSettings(s, "world settings"));
+  s.fixed_delta_seconds(-0.1);
+  EXPECT_THROW(ValidateWorldSettings(s, "world settings"), InputError);
+  s.fixed_delta_seconds(std::numeric_limits<double>::quiet_NaN());
+  EXPECT_THROW(ValidateWorldSettings(s, "world settings"), InputError);
 }
 
 TEST(LaunchConfig, SyntaxErrorNamesTheLine) {

@@ -1,11 +1,16 @@
 """carla.Actor, Vehicle, Walker, TrafficLight, Sensor, WalkerAIController and their
 controls, over the states the physics services publish (GroundState, AirState)."""
 import math
+import sys
 import threading
 
+import lockstep
+
+from . import components as _components
+from .components import WalkerBoneControlOut, BoneTransformDataOut
 from .errors import unsupported
-from .geometry import (BoundingBox, Location, Transform, Vector3D, from_enu_vector, from_wire_pose, to_enu_vector,
-                       to_wire_pose)
+from .geometry import (BoundingBox, Location, Rotation, Transform, Vector3D, from_enu_vector, from_wire_pose, shift_up,
+                       to_enu_vector, to_wire_pose)
 from .physics import VehicleAckermannControl  # noqa: F401 (carla.VehicleAckermannControl)
 from .physics import from_wire as _physics_from_wire
 from .physics import to_wire as _physics_to_wire
@@ -13,7 +18,11 @@ from .sensor_data import make_sensor_data
 
 __all__ = ['VehicleControl', 'WalkerControl', 'TrafficLightState', 'AttachmentType', 'ActorState', 'Actor', 'Vehicle',
            'Walker', 'TrafficLight', 'Sensor', 'ServerSideSensor', 'WalkerAIController', 'ActorList', 'make_actor',
-           'VehicleLightState', 'VehicleDoor', 'VehicleWheelLocation', 'VehicleAckermannControl']
+           'VehicleLightState', 'VehicleDoor', 'VehicleWheelLocation', 'VehicleAckermannControl', 'TrafficSign',
+           'WalkerBoneControlIn', 'WalkerBoneControlOut', 'BoneTransformDataIn', 'BoneTransformDataOut',
+           'state_transform']
+
+from .components import BoneTransformDataIn, WalkerBoneControlIn  # noqa: E402 (carla.* names)
 
 
 class VehicleControl:
@@ -98,6 +107,44 @@ class VehicleWheelLocation:
     BR_Wheel = 3
 
 
+# CARLA's semantic tags (carla.CityObjectLabel) of an actor, by kind and base_type.
+_TAGS_BY_BASE_TYPE = {'car': 14, 'van': 14, 'truck': 15, 'bus': 16, 'motorcycle': 18, 'bicycle': 19}
+
+
+def _semantic_tags(kind, attributes):
+    if kind == 'vehicle':
+        tags = [_TAGS_BY_BASE_TYPE.get(attributes.get('base_type', 'car'), 14)]
+        if tags[0] in (18, 19):
+            tags.append(13)  # the rider
+        return sorted(tags)
+    return {'walker': [12], 'traffic_light': [7], 'traffic_sign': [8], 'prop': [20]}.get(kind, [])
+
+
+def state_transform(state):
+    """carla.Transform of an actor state dict: the wire pose, and for vehicles CARLA's
+    origin (the base of the box, not its centre)."""
+    t = from_wire_pose(state['transform'])
+    if state.get('kind') == 'vehicle':
+        t = shift_up(t, -state['half_extents'][2])
+    return t
+
+
+def _warn(message):
+    sys.stderr.write('WARNING: %s\n' % message)
+    sys.stderr.flush()
+
+
+def _compose(a, b):
+    """Transform a then b (b given in a's frame), by rotation matrices."""
+    loc = a.transform(Location(b.location))
+    ma, mb = a.rotation._matrix(), b.rotation._matrix()
+    m = [[sum(ma[i][k] * mb[k][j] for k in range(3)) for j in range(3)] for i in range(3)]
+    pitch = math.degrees(math.asin(max(-1.0, min(1.0, m[2][0]))))
+    yaw = math.degrees(math.atan2(m[1][0], m[0][0]))
+    roll = math.degrees(math.atan2(-m[2][1], m[2][2]))
+    return Transform(loc, Rotation(pitch, yaw, roll))
+
+
 def _qmul(a, b):
     aw, ax, ay, az = a
     bw, bx, by, bz = b
@@ -117,8 +164,12 @@ class Actor:
         self._info = info
         self.id = info['id']
         self.type_id = info['blueprint']
-        self.attributes = dict(info.get('attributes', {}))
-        self.semantic_tags = []
+        # CARLA's actor attributes: every attribute of the blueprint, with the values spawned.
+        decl = world._declaration(self.type_id)
+        attrs = {a['id']: a['default'] for a in decl['attributes'] if not a['id'].startswith('_')} if decl else {}
+        attrs.update(info.get('attributes', {}))
+        self.attributes = attrs
+        self.semantic_tags = _semantic_tags(info.get('kind', ''), attrs)
         self._destroyed = False
 
     # --- state ---
@@ -154,17 +205,29 @@ class Actor:
     def is_alive(self):
         return not self._destroyed and self._world._client.actor(self.id) is not None
 
+    def _half_extents(self):
+        s = self._state()
+        if s:
+            return tuple(s['half_extents'])
+        decl = self._world._declaration(self.type_id)
+        return tuple(decl['half_extents']) if decl else (0.0, 0.0, 0.0)
+
+    def _base_offset(self):
+        """m from the wire pose (the box centre) down to CARLA's actor origin: 0 but for vehicles."""
+        return 0.0
+
     @property
     def bounding_box(self):
-        s = self._state()
-        e = s['half_extents'] if s else (0.0, 0.0, 0.0)
-        return BoundingBox(Location(0, 0, 0), Vector3D(*e))
+        """In the actor's frame, as CARLA's: a vehicle's box centre is above its origin."""
+        return BoundingBox(Location(0, 0, self._base_offset()), Vector3D(*self._half_extents()))
 
     def get_world(self):
         return self._world
 
     def get_transform(self):
-        return from_wire_pose(self._wire_pose())
+        t = from_wire_pose(self._wire_pose())
+        dz = self._base_offset()
+        return shift_up(t, -dz) if dz else t
 
     def get_location(self):
         return self.get_transform().location
@@ -185,8 +248,13 @@ class Actor:
         s = self._state()
         return from_enu_vector(s['acceleration']) if s else Vector3D()
 
+    def _to_wire_transform(self, transform):
+        dz = self._base_offset()
+        return shift_up(transform, dz) if dz else transform
+
     def set_transform(self, transform):
-        self._world._client.submit({'type': 'set_transform', 'actor': self.id, 'transform': to_wire_pose(transform)})
+        self._world._client.submit({'type': 'set_transform', 'actor': self.id,
+                                    'transform': to_wire_pose(self._to_wire_transform(transform))})
 
     def set_location(self, location):
         t = self.get_transform()
@@ -233,18 +301,78 @@ class Actor:
                       value=(-math.radians(w.x), math.radians(w.y), -math.radians(w.z)))
 
     def enable_constant_velocity(self, velocity):
-        unsupported('Actor.enable_constant_velocity', 'ground_sim has no constant-velocity mode; call '
-                    'set_target_velocity every tick')
+        """m/s in the actor's frame (CARLA's): kept by a set_target_velocity, turned into the
+        world by the actor's current rotation, before every tick this client drives (tick)
+        or sees (wait_for_tick); CARLA's physics enforces it every step. Needs ground_sim."""
+        self._world._require('ground_sim', 'Actor.enable_constant_velocity')
+        self._world._constant_velocity[self.id] = Vector3D(velocity)
+        self._world._apply_constant_velocities()
 
     def disable_constant_velocity(self):
-        unsupported('Actor.disable_constant_velocity', 'ground_sim has no constant-velocity mode')
+        self._world._constant_velocity.pop(self.id, None)
 
     def destroy(self):
-        if self._destroyed:
-            return False
-        self._world._client.destroy(self.id)
+        """True once destroyed. An actor already gone (destroyed before, or with the parent it
+        was attached to) logs CARLA's warning and returns False, as CARLA's Actor::Destroy."""
+        if self._destroyed or self._world._client.actor(self.id) is None:
+            return self._already_dead()
+        try:
+            self._world._client.destroy(self.id)
+        except lockstep.CommandRejected as e:
+            if 'unknown actor' not in str(getattr(e, 'reason', e)):
+                raise
+            return self._already_dead()
         self._destroyed = True
         return True
+
+    def _already_dead(self):
+        self._destroyed = True
+        _warn('attempting to destroy an actor that is already dead: Actor %d (%s)' % (self.id, self.type_id))
+        return False
+
+    # --- components, bones and sockets (CARLA 0.9.15) ---
+    def _components(self):
+        """{name: Transform relative to the actor's origin}."""
+        return {'RootComponent': Transform()}
+
+    def _bones(self):
+        """[(name, parent, Transform relative to the actor's origin)]."""
+        return []
+
+    def get_component_names(self):
+        return list(self._components())
+
+    def _component(self, component_name):
+        comps = self._components()
+        if component_name not in comps:
+            raise RuntimeError("Actor %d (%s) has no component '%s' (it has: %s)"
+                               % (self.id, self.type_id, component_name, ', '.join(comps)))
+        return comps[component_name]
+
+    def get_component_relative_transform(self, component_name):
+        return Transform(self._component(component_name).location, self._component(component_name).rotation)
+
+    def get_component_world_transform(self, component_name):
+        return _compose(self.get_transform(), self._component(component_name))
+
+    def get_bone_names(self):
+        return [b[0] for b in self._bones()]
+
+    def get_bone_relative_transforms(self):
+        return [Transform(b[2].location, b[2].rotation) for b in self._bones()]
+
+    def get_bone_world_transforms(self):
+        t = self.get_transform()
+        return [_compose(t, b[2]) for b in self._bones()]
+
+    def get_socket_names(self):
+        return []
+
+    def get_socket_relative_transforms(self):
+        return []
+
+    def get_socket_world_transforms(self):
+        return []
 
     def __eq__(self, o):
         return isinstance(o, Actor) and self.id == o.id
@@ -257,6 +385,15 @@ class Actor:
 
 
 class Vehicle(Actor):
+    def _base_offset(self):
+        return self._half_extents()[2]
+
+    def _components(self):
+        return _components.vehicle_components(self._half_extents())
+
+    def _bones(self):
+        return [(n, p, Transform(loc)) for n, p, loc in _components.vehicle_bones(self._half_extents())]
+
     def apply_control(self, control):
         self._world._client.submit(dict(control._wire(), actor=self.id))
 
@@ -290,16 +427,20 @@ class Vehicle(Actor):
         self._world._require('ground_sim', call)
         d = self._world._client.vehicle_physics(self.id)
         if d is None:
-            raise RuntimeError('%s: vehicle %d has no state yet (tick once after spawning it)' % (call, self.id))
+            # Spawned, not simulated yet: the physics ground_sim declares for the blueprint.
+            d = _physics_from_declaration(self._world._declaration(self.type_id))
+            if d is None:
+                raise RuntimeError('%s: vehicle %d (%s) has no state yet and its blueprint declares no physics'
+                                   % (call, self.id, self.type_id))
         return self._world._applied_value(self.id, 'physics', d)
 
     def get_physics_control(self):
         """The vehicle's physics: what this client applied last until the GroundState of
         the frame that applies it arrives (so it reads back at once, as CARLA), then what
-        ground_sim reports."""
-        s = self._state()
-        return _physics_from_wire(self._physics_wire('Vehicle.get_physics_control'), from_wire_pose(s['transform']),
-                                  s['half_extents'])
+        ground_sim reports; before its first state, what its blueprint declares."""
+        wire = self._physics_wire('Vehicle.get_physics_control')
+        centre = from_wire_pose(self._wire_pose())
+        return _physics_from_wire(wire, centre, self._half_extents())
 
     def apply_physics_control(self, physics_control):
         call = 'Vehicle.apply_physics_control'
@@ -337,6 +478,78 @@ class Vehicle(Actor):
 
 
 class Walker(Actor):
+    """CARLA's walker, with one fixed skeleton (CARLA's bone names) standing upright; the
+    pose calls blend a custom pose (set_bones) with it, as CARLA's blend the animation."""
+
+    def __init__(self, world, info):
+        super().__init__(world, info)
+        self._custom_pose = {}
+        self._blend = 0.0
+
+    def _height(self):
+        try:
+            return float(self.attributes.get('height', 2 * self._half_extents()[2]))
+        except ValueError:
+            return 2 * self._half_extents()[2]
+
+    def _components(self):
+        h = self._height()
+        return {'CollisionCylinder': Transform(), 'CharacterMesh0': Transform(Location(0, 0, -h / 2))}
+
+    def _animation(self):
+        """[(name, parent, relative Transform to the parent bone)] of the fixed skeleton."""
+        bones = _components.walker_bones(self._height())
+        comp = {n: loc for n, _, loc in bones}
+        return [(n, p, Transform(loc - comp[p] if p else loc)) for n, p, loc in bones]
+
+    def _posed(self):
+        """[(name, parent, relative, component)] with the custom pose blended in."""
+        out, comp = [], {}
+        for name, parent, rel in self._animation():
+            custom = self._custom_pose.get(name)
+            if custom is not None and self._blend > 0:
+                k = min(1.0, self._blend)
+                a, b = rel, custom
+                rel = Transform(a.location + (b.location - a.location) * k,
+                                Rotation(a.rotation.pitch + (b.rotation.pitch - a.rotation.pitch) * k,
+                                         a.rotation.yaw + (b.rotation.yaw - a.rotation.yaw) * k,
+                                         a.rotation.roll + (b.rotation.roll - a.rotation.roll) * k))
+            c = _compose(comp[parent], rel) if parent else Transform(rel.location, rel.rotation)
+            comp[name] = c
+            out.append((name, parent, rel, c))
+        return out
+
+    def _bones(self):
+        return [(n, p, c) for n, p, _, c in self._posed()]
+
+    def get_bones(self):
+        """carla.WalkerBoneControlOut: every bone's world, component and relative transform."""
+        t = self.get_transform()
+        return WalkerBoneControlOut([BoneTransformDataOut(n, _compose(t, c), c, r) for n, _, r, c in self._posed()])
+
+    def set_bones(self, bones):
+        """A custom pose: bone name -> transform relative to its parent bone."""
+        names = {n for n, _, _ in self._animation()}
+        for b in bones.bone_transforms:
+            name, t = (b.bone_name, b.transform) if hasattr(b, 'bone_name') else (b[0], b[1])  # (name, Transform)
+            if name not in names:
+                raise RuntimeError("Walker %d: no bone '%s' in its skeleton" % (self.id, name))
+            self._custom_pose[name] = Transform(t.location, t.rotation)
+
+    def blend_pose(self, blend):
+        """0: the skeleton's own pose; 1: the custom pose; between: interpolated."""
+        self._blend = max(0.0, min(1.0, float(blend)))
+
+    def show_pose(self):
+        self._blend = 1.0
+
+    def hide_pose(self):
+        self._blend = 0.0
+
+    def get_pose_from_animation(self):
+        """The custom pose becomes the current pose."""
+        self._custom_pose = {n: r for n, _, r, _ in self._posed()}
+
     def apply_control(self, control):
         self._world._client.submit(dict(control._wire(), actor=self.id))
 
@@ -371,7 +584,15 @@ class WalkerAIController(Actor):
         self._ai('WalkerAIController.stop', 'stop')
 
 
-class TrafficLight(Actor):
+class TrafficSign(Actor):
+    """carla.TrafficSign: a sign actor with the volume where vehicles react to it."""
+
+    @property
+    def trigger_volume(self):
+        return BoundingBox()
+
+
+class TrafficLight(TrafficSign):
     def _light(self):
         s = self._state()
         if not s or 'light' not in s:
@@ -493,8 +714,11 @@ class Sensor(Actor):
         return self._world._client.is_listening(self.id)
 
     def destroy(self):
-        if self.is_listening:
-            self.stop()
+        if self._callback is not None or self.is_listening:
+            try:
+                self.stop()
+            except lockstep.ClientError:
+                pass  # a sensor already gone: CARLA's warning below
         return super().destroy()
 
 
@@ -514,7 +738,36 @@ class ActorList(list):
 
 
 _KINDS = {'vehicle': Vehicle, 'walker': Walker, 'sensor': Sensor, 'traffic_light': TrafficLight,
-          'controller': WalkerAIController}
+          'traffic_sign': TrafficSign, 'controller': WalkerAIController}
+
+
+# ground_sim declares each vehicle blueprint's physics (what it simulates from the spawn on)
+# in attributes that CARLA's blueprints do not have, hidden by the carla package: '_physics.*',
+# numbers separated by spaces, SI units (idl/lockstep/command.idl VehiclePhysicsControl).
+def _physics_from_declaration(decl):
+    if not decl:
+        return None
+    a = {x['id']: x['default'] for x in decl['attributes'] if x['id'].startswith('_physics.')}
+    if not {'_physics.engine', '_physics.torque_curve', '_physics.gears', '_physics.body',
+            '_physics.wheels'} <= set(a):
+        return None
+
+    def nums(key):
+        return [float(v) for v in a[key].split()]
+
+    max_rpm, moi, damping, autobox, switch, clutch, final_ratio = nums('_physics.engine')
+    curve = nums('_physics.torque_curve')
+    gears = nums('_physics.gears')
+    mass, drag, cx, cy, cz = nums('_physics.body')
+    (friction, radius, steer, brake, handbrake, stiffness, sdamping, wheelbase, track) = nums('_physics.wheels')
+    return {'torque_curve': [(curve[i], curve[i + 1]) for i in range(0, len(curve) - 1, 2)], 'max_rpm': max_rpm,
+            'moi': moi, 'damping_rate_full_throttle': damping, 'use_gear_autobox': autobox != 0.0,
+            'gear_switch_time': switch, 'clutch_strength': clutch, 'final_ratio': final_ratio,
+            'forward_gears': [tuple(gears[i:i + 3]) for i in range(0, len(gears) - 2, 3)], 'mass': mass,
+            'drag_coefficient': drag, 'center_of_mass': (cx, cy, cz), 'tire_friction': friction,
+            'wheel_radius': radius, 'max_steer_angle': steer, 'max_brake_torque': brake,
+            'max_handbrake_torque': handbrake, 'suspension_stiffness': stiffness, 'suspension_damping': sdamping,
+            'wheelbase': wheelbase, 'track': track}
 
 
 def make_actor(world, info):

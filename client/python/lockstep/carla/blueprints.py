@@ -101,7 +101,8 @@ class ActorBlueprint:
         self.id = decl['id']
         self.tags = [t for t in decl['tags'].split(',') if t] or self.id.split('.')
         self.kind = decl['kind']
-        self._attrs = {a['id']: ActorAttribute(a) for a in decl['attributes']}
+        # Attributes whose id starts with '_' are Lockstep's (e.g. ground_sim's '_physics.*'), not CARLA's.
+        self._attrs = {a['id']: ActorAttribute(a) for a in decl['attributes'] if not a['id'].startswith('_')}
         self._set = {}
         # CARLA picks one of the recommended values for attributes like color at random.
         for a in decl['attributes']:

@@ -39,7 +39,8 @@ class SpawnActor(_Command):
         self.blueprint, self.transform, self.parent = blueprint, transform, parent
 
     def to_dict(self, actor=0):
-        return {'type': 'spawn', 'blueprint': self.blueprint.id, 'transform': to_wire_pose(self.transform),
+        t = getattr(self, '_wire_transform', self.transform)  # Client._prepare: CARLA's origins -> the wire's
+        return {'type': 'spawn', 'blueprint': self.blueprint.id, 'transform': to_wire_pose(t),
                 'attributes': self.blueprint.spawn_attributes(), 'parent': _id(self.parent) if self.parent else 0}
 
 
@@ -72,7 +73,8 @@ class ApplyTransform(_Command):
         self.actor_id, self.transform = _id(actor), transform
 
     def to_dict(self, actor=0):
-        return {'type': 'set_transform', 'actor': self.actor_id or actor, 'transform': to_wire_pose(self.transform)}
+        t = getattr(self, '_wire_transform', self.transform)  # Client._prepare: CARLA's origins -> the wire's
+        return {'type': 'set_transform', 'actor': self.actor_id or actor, 'transform': to_wire_pose(t)}
 
 
 class ApplyLocation(ApplyTransform):

@@ -2,7 +2,6 @@
 (the same OpenDRIVE queries the services use), built from the map the coordinator publishes."""
 import math
 
-from .errors import unsupported
 from .geometry import BoundingBox, GeoLocation, Location, Rotation, Transform, Vector3D
 
 __all__ = ['LaneType', 'LaneChange', 'LaneMarkingType', 'LaneMarkingColor', 'LaneMarking', 'Waypoint', 'Map',
@@ -204,6 +203,26 @@ class Junction:
         return 'Junction(id=%s)' % self.id
 
 
+def _native_from_text(name, text):
+    import os
+    import tempfile
+    from lockstep._lockstep import Map as _NativeMap
+    d = tempfile.mkdtemp(prefix='lockstep-map-')
+    path = os.path.join(d, os.path.basename(str(name)) or 'map')
+    if not path.endswith('.xodr'):
+        path += '.xodr'
+    try:
+        with open(path, 'w') as f:
+            f.write(text)
+        return _NativeMap.load(path)
+    finally:
+        try:
+            os.remove(path)
+            os.rmdir(d)
+        except OSError:
+            pass
+
+
 def _transform(pose6):
     """(x, y, z, yaw, pitch, roll) ENU radians -> carla.Transform."""
     x, y, z, yaw, pitch, roll = pose6
@@ -233,6 +252,11 @@ class Waypoint:
         if self._transform is None:
             self._transform = _transform(self._w.pose)
         return self._transform
+
+    @property
+    def is_intersection(self):
+        """CARLA's deprecated name of is_junction."""
+        return self.is_junction
 
     @property
     def lane_change(self):
@@ -307,7 +331,15 @@ class Waypoint:
 
 
 class Map:
+    """carla.Map. `carla.Map(name, xodr_content)` builds one from OpenDRIVE text, as CARLA's."""
+
     def __init__(self, native, opendrive_name):
+        if isinstance(native, str):  # CARLA's Map(name, xodr_content)
+            name, text = native, opendrive_name
+            native = _native_from_text(name, text)
+            from .world import _remember_opendrive
+            _remember_opendrive(None, native.name or name, text)
+            opendrive_name = name
         self._native = native
         self.name = native.name or opendrive_name
 
@@ -341,11 +373,30 @@ class Map:
                 pass
         return lat, lon
 
-    def transform_to_geolocation(self, location):
-        """CARLA's GeoLocation::Transform: a Mercator projection scaled at the
-        OpenDRIVE <geoReference> latitude (+lat_0, +lon_0), altitude = z."""
+    def get_geo_reference(self):
+        """The map's origin as a carla.GeoLocation (OpenDRIVE <geoReference> +lat_0, +lon_0)."""
         lat0, lon0 = self._geo_reference()
-        r = 6378137.0
+        return GeoLocation(lat0, lon0, 0.0)
+
+    get_georeference = get_geo_reference
+
+    def geolocation_to_transform(self, geo_location, ellipsoid=None):
+        """The inverse of transform_to_geolocation: a carla.Location (z = altitude)."""
+        lat0, lon0 = self._geo_reference()
+        r = float(ellipsoid.a) if ellipsoid is not None else 6378137.0
+        scale = math.cos(math.radians(lat0))
+        mx0 = scale * math.radians(lon0) * r
+        my0 = scale * r * math.log(math.tan(math.radians(90.0 + lat0) / 2.0))
+        mx = scale * math.radians(geo_location.longitude) * r
+        my = scale * r * math.log(math.tan(math.radians(90.0 + geo_location.latitude) / 2.0))
+        return Location(mx - mx0, -(my - my0), geo_location.altitude)
+
+    def transform_to_geolocation(self, location, ellipsoid=None):
+        """CARLA's GeoLocation::Transform: a Mercator projection scaled at the
+        OpenDRIVE <geoReference> latitude (+lat_0, +lon_0), altitude = z; the radius is the
+        ellipsoid's semi-major axis (CARLA 0.9.16's GeoEllipsoid; WGS84's by default)."""
+        lat0, lon0 = self._geo_reference()
+        r = float(ellipsoid.a) if ellipsoid is not None else 6378137.0
         scale = math.cos(math.radians(lat0))
         mx = scale * math.radians(lon0) * r + location.x
         my = scale * r * math.log(math.tan(math.radians(90.0 + lat0) / 2.0)) - location.y
@@ -354,7 +405,13 @@ class Map:
         return GeoLocation(lat, lon, location.z)
 
     def to_opendrive(self):
-        unsupported('Map.to_opendrive', 'read the .xodr file the run was started with')
+        """The map's OpenDRIVE text."""
+        from .world import opendrive_text
+        text = opendrive_text(self.name, self._native)
+        if text is None:
+            raise RuntimeError("Map.to_opendrive: the OpenDRIVE text of map '%s' was loaded by another process and "
+                               'no %s.xodr on the maps path (LOCKSTEP_MAPS_PATH) matches it' % (self.name, self.name))
+        return text
 
     def get_all_landmarks(self):
         """One carla.Landmark per <signal> and per <signalReference> of the OpenDRIVE file

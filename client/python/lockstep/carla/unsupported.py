@@ -1,12 +1,12 @@
 """CARLA calls Lockstep cannot do, each raising LockstepUnsupported with its reason
 (docs/compatibility.md lists them with the rest)."""
-from .actors import Actor, Sensor, TrafficLight, Vehicle, Walker
+from .actors import Sensor, TrafficLight, Vehicle
 from .errors import add_unsupported
 from .map import Map
 from .world import Client, TrafficManager, World
 
 _NO_RECORDER = 'recording is the recorder service of the launch config (CSV of every frame)'
-_NO_SCENE = 'the static scene (Unreal objects, components, bones) is not on the wire'
+_NO_SCENE = 'the static scene (Unreal objects) is not on the wire'
 
 add_unsupported(Vehicle, {
     'close_door': 'doors are not simulated',
@@ -48,17 +48,3 @@ add_unsupported(Client, {
     'stop_replayer': _NO_RECORDER,
 })
 add_unsupported(TrafficLight, {'get_light_boxes': 'the light meshes are not in the client'})
-add_unsupported(Actor, {
-    'get_component_world_transform': _NO_SCENE,
-    'get_component_relative_transform': _NO_SCENE,
-    'get_bone_world_transforms': _NO_SCENE,
-    'get_component_names': _NO_SCENE,
-    'get_socket_names': _NO_SCENE,
-})
-add_unsupported(Walker, {
-    'blend_pose': 'walkers are boxes in ground_sim: no skeleton',
-    'show_pose': 'walkers are boxes in ground_sim: no skeleton',
-    'hide_pose': 'walkers are boxes in ground_sim: no skeleton',
-    'get_bones': 'walkers are boxes in ground_sim: no skeleton',
-    'set_bones': 'walkers are boxes in ground_sim: no skeleton',
-})

@@ -8,15 +8,27 @@ import time
 import lockstep
 
 from . import command as _command
-from .actors import ActorList, make_actor
+from .actors import ActorList, make_actor, state_transform
 from .blueprints import BlueprintLibrary
 from .constants import WEATHER_FIELDS, WEATHER_PRESETS
 from .errors import unsupported
-from .geometry import Transform, from_enu_vector, from_wire_pose, to_enu_vector, to_wire_pose
+from .geometry import Location, Transform, Vector3D, from_enu_vector, shift_up, to_enu_vector, to_wire_pose
 from .map import Map
 
 __all__ = ['Client', 'World', 'WorldSettings', 'WeatherParameters', 'TrafficManager', 'WorldSnapshot', 'ActorSnapshot',
-           'Timestamp', 'maps_path']
+           'Timestamp', 'maps_path', 'OpendriveGenerationParameters']
+
+
+class OpendriveGenerationParameters:
+    """carla.OpendriveGenerationParameters: how CARLA meshes an OpenDRIVE-only world.
+    Lockstep builds its town meshes from the map itself: the values are kept, not used."""
+
+    def __init__(self, vertex_distance=2.0, max_road_length=50.0, wall_height=1.0, additional_width=0.6,
+                 smooth_junctions=True, enable_mesh_visibility=True, enable_pedestrian_navigation=True):
+        self.vertex_distance, self.max_road_length = float(vertex_distance), float(max_road_length)
+        self.wall_height, self.additional_width = float(wall_height), float(additional_width)
+        self.smooth_junctions, self.enable_mesh_visibility = bool(smooth_junctions), bool(enable_mesh_visibility)
+        self.enable_pedestrian_navigation = bool(enable_pedestrian_navigation)
 
 
 class WorldSettings:
@@ -50,15 +62,17 @@ class WorldSettings:
     def _to_wire(self):
         d = {'synchronous_mode': bool(self.synchronous_mode), 'no_rendering_mode': bool(self.no_rendering_mode),
              'perception_mode': self.perception_mode, 'real_time_factor': float(self.real_time_factor)}
-        # fixed_delta_seconds=None (CARLA's variable step) keeps the current fixed step: Lockstep is always fixed-step.
-        if self.fixed_delta_seconds is not None:
+        # fixed_delta_seconds=None (CARLA's variable step; CARLA reads <= 0 as None) keeps the current
+        # fixed step: Lockstep is always fixed-step. Any positive step is accepted, as CARLA's.
+        if self.fixed_delta_seconds is not None and float(self.fixed_delta_seconds) > 0:
             d['fixed_delta_seconds'] = float(self.fixed_delta_seconds)
         if self.substepping:
             d['max_substep_delta_time'] = float(self.max_substep_delta_time)
             d['max_substeps'] = int(self.max_substeps)
         else:
             d['max_substeps'] = 1
-            d['max_substep_delta_time'] = float(self.fixed_delta_seconds or 0.05)
+            fixed = self.fixed_delta_seconds
+            d['max_substep_delta_time'] = float(fixed) if fixed is not None and float(fixed) > 0 else 0.05
         return d
 
     def __repr__(self):
@@ -103,9 +117,16 @@ class Timestamp:
         self.delta_seconds = delta_seconds
         self.platform_timestamp = time.time()
 
+    def __eq__(self, o):
+        return isinstance(o, Timestamp) and (self.frame, self.elapsed_seconds, self.delta_seconds) == (
+            o.frame, o.elapsed_seconds, o.delta_seconds)
+
+    def __ne__(self, o):
+        return not self == o
+
     def __repr__(self):
-        return 'Timestamp(frame=%d, elapsed_seconds=%f, delta_seconds=%f)' % (self.frame, self.elapsed_seconds,
-                                                                              self.delta_seconds)
+        return 'Timestamp(frame=%d, elapsed_seconds=%f, delta_seconds=%f, platform_timestamp=%f)' % (
+            self.frame, self.elapsed_seconds, self.delta_seconds, self.platform_timestamp)
 
 
 class ActorSnapshot:
@@ -114,7 +135,8 @@ class ActorSnapshot:
         self._s = state
 
     def get_transform(self):
-        return from_wire_pose(self._s['transform'])
+        """As Actor.get_transform of that frame (a vehicle's origin is the base of its box)."""
+        return state_transform(self._s)
 
     def get_velocity(self):
         return from_enu_vector(self._s['velocity'])
@@ -135,6 +157,29 @@ class WorldSnapshot:
         self.timestamp = Timestamp(frame, sim_time, world._dt())
         self._states = {k: ActorSnapshot(v) for k, v in client.states().items()}
 
+    # CARLA's deprecated WorldSnapshot properties (on_tick callbacks read them: automatic_control.py).
+    @property
+    def frame_count(self):
+        return self.timestamp.frame
+
+    @property
+    def elapsed_seconds(self):
+        return self.timestamp.elapsed_seconds
+
+    @property
+    def delta_seconds(self):
+        return self.timestamp.delta_seconds
+
+    @property
+    def platform_timestamp(self):
+        return self.timestamp.platform_timestamp
+
+    def __eq__(self, o):
+        return isinstance(o, WorldSnapshot) and (self.id, self.frame) == (o.id, o.frame)
+
+    def __ne__(self, o):
+        return not self == o
+
     def find(self, actor_id):
         return self._states.get(actor_id)
 
@@ -146,6 +191,43 @@ class WorldSnapshot:
 
     def __len__(self):
         return len(self._states)
+
+
+# OpenDRIVE texts this process loaded (Map.to_opendrive): {map name: text}.
+_opendrive_texts = {}
+
+
+def _remember_opendrive(path, name=None, text=None):
+    if text is None:
+        try:
+            with open(path) as f:
+                text = f.read()
+        except OSError:
+            return
+    if name is None:
+        name = os.path.splitext(os.path.basename(path))[0]
+    _opendrive_texts[name] = text
+
+
+def opendrive_text(name, native):
+    """The OpenDRIVE text of the running map `name`: what this process loaded, else the
+    `<name>.xodr` on the maps path that parses to the same road network as `native`."""
+    if name in _opendrive_texts:
+        return _opendrive_texts[name]
+    from lockstep._lockstep import Map as _NativeMap
+    for d in maps_path():
+        p = os.path.join(d, name + '.xodr')
+        if not os.path.isfile(p):
+            continue
+        try:
+            candidate = _NativeMap.load(p)
+        except Exception:  # noqa: BLE001 (an unreadable file is not the map)
+            continue
+        if (candidate.geo_reference == native.geo_reference and len(candidate.topology()) == len(native.topology())
+                and candidate.spawn_points(25.0) == native.spawn_points(25.0)):
+            _remember_opendrive(p, name)
+            return _opendrive_texts[name]
+    return None
 
 
 def maps_path():
@@ -205,9 +287,23 @@ class Client:
                 return p
         raise RuntimeError("map '%s' not found in %s (set LOCKSTEP_MAPS_PATH)" % (name, ':'.join(maps_path())))
 
+    def _reset_settings(self, reset_settings):
+        """CARLA's reset_settings=True: the new episode starts with CARLA's default settings
+        (asynchronous, rendering, substepping 0.01 s x 10); False keeps the current ones
+        (Lockstep keeps them across a reset). The fixed step is kept: CARLA's default is a
+        variable step, which Lockstep does not have."""
+        if reset_settings:
+            s = self.get_world().get_settings()
+            s.synchronous_mode, s.no_rendering_mode = False, False
+            s.substepping, s.max_substep_delta_time, s.max_substeps = True, 0.01, 10
+            self.get_world().apply_settings(s)
+
     def load_world(self, map_name, reset_settings=True, map_layers=None):
         c = self._client()
-        c.load_map(self._find_map(map_name))
+        path = self._find_map(map_name)
+        c.load_map(path)
+        _remember_opendrive(path)
+        self._reset_settings(reset_settings)
         return self.get_world()
 
     def load_world_if_different(self, map_name, reset_settings=True, map_layers=None):
@@ -217,10 +313,13 @@ class Client:
 
     def reload_world(self, reset_settings=True):
         self._client().reset(0)
+        self._reset_settings(reset_settings)
         return self.get_world()
 
     def generate_opendrive_world(self, opendrive, parameters=None, reset_settings=True):
         self._client().load_map('opendrive', opendrive)
+        _remember_opendrive(None, 'opendrive', opendrive)
+        self._reset_settings(reset_settings)
         return self.get_world()
 
     def get_trafficmanager(self, client_connection=8000):
@@ -232,6 +331,19 @@ class Client:
                 cmd._dt = world._dt()
             elif isinstance(cmd, _command.ApplyVehiclePhysicsControl) and cmd.actor_id:
                 cmd._current = world._client.vehicle_physics(cmd.actor_id)
+            elif isinstance(cmd, _command.SpawnActor):
+                parent = cmd.parent
+                if isinstance(parent, int):
+                    parent = world.get_actor(parent) if parent else None
+                cmd._wire_transform = world._wire_spawn_transform(cmd.blueprint.id, cmd.blueprint.kind, cmd.transform,
+                                                                  parent)
+            elif isinstance(cmd, _command.ApplyTransform) and cmd.actor_id:
+                actor = world.get_actor(cmd.actor_id)
+                if actor is not None:
+                    t = cmd.transform
+                    if isinstance(cmd, _command.ApplyLocation):  # CARLA's ApplyLocation keeps the rotation
+                        t = Transform(t.location, actor.get_transform().rotation)
+                    cmd._wire_transform = actor._to_wire_transform(t)
             self._prepare(getattr(cmd, '_then', []), world)
 
     def _submit(self, c, commands, actor=0):
@@ -316,6 +428,22 @@ class World:
         # (actor, 'physics' | 'light_state') -> (frame, value) this client applied: shown
         # until the state of that frame arrives (CARLA applies them at once).
         self._applied = {}
+        # Blueprint declarations by id (Actor.attributes, vehicles' sizes and physics at spawn).
+        self._decls = {}
+        self._decls_read = None
+        # Actor.enable_constant_velocity: {actor id: velocity in the actor's frame}.
+        self._constant_velocity = {}
+
+    def _apply_constant_velocities(self):
+        for actor_id, local in list(self._constant_velocity.items()):
+            actor = self.get_actor(actor_id)
+            if actor is None:
+                self._constant_velocity.pop(actor_id, None)
+                continue
+            try:
+                actor.set_target_velocity(actor.get_transform().transform_vector(Vector3D(local)))
+            except lockstep.CommandRejected:
+                self._constant_velocity.pop(actor_id, None)  # gone meanwhile
 
     def _note_applied(self, cmd, frame):
         if cmd['type'] == 'vehicle_physics':
@@ -353,10 +481,22 @@ class World:
         return self._client.apply_settings(settings._to_wire())
 
     def tick(self, seconds=10.0):
-        return self._client.tick()
+        """The frame the tick produced. Asynchronous, CARLA's tick cue is only counted by the
+        server and the call waits for the next frame: the same here (no CommandRejected)."""
+        if self._constant_velocity:
+            self._apply_constant_velocities()
+        try:
+            return self._client.tick()
+        except lockstep.CommandRejected as e:
+            if 'synchronous' not in str(getattr(e, 'reason', e)):
+                raise
+        self._client.wait_for_tick(seconds)
+        return self._client.snapshot_frame()[1]
 
     def wait_for_tick(self, seconds=10.0):
         self._client.wait_for_tick(seconds)
+        if self._constant_velocity:
+            self._apply_constant_velocities()
         return WorldSnapshot(self)
 
     def on_tick(self, callback):
@@ -408,6 +548,30 @@ class World:
         return self._spectator
 
     # --- actors ---
+    def _declaration(self, blueprint_id):
+        """The declaration (dict) of a blueprint, None if no running service declares it."""
+        d = self._decls.get(blueprint_id)
+        now = time.monotonic()
+        if d is None and (self._decls_read is None or now - self._decls_read > 1.0):
+            self._decls = {x['id']: x for x in self._client.blueprints(0.0)}
+            self._decls_read = now
+            d = self._decls.get(blueprint_id)
+        return d
+
+    def _wire_spawn_transform(self, blueprint_id, kind, transform, parent):
+        """CARLA's transform of a spawn -> the wire's: a vehicle's origin is the base of its
+        box (the wire carries the box centre), and so is the frame of what is attached to one."""
+        if kind == 'vehicle':
+            d = self._declaration(blueprint_id)
+            if d is not None:
+                transform = shift_up(transform, d['half_extents'][2])
+        if parent is not None:
+            dz = parent._base_offset() if hasattr(parent, '_base_offset') else 0.0
+            if dz:
+                loc = transform.location
+                transform = Transform(Location(loc.x, loc.y, loc.z - dz), transform.rotation)
+        return transform
+
     def _wrap(self, info):
         a = self._actors.get(info['id'])
         if a is None or a.type_id != info['blueprint']:
@@ -427,6 +591,7 @@ class World:
         return ActorList(self._wrap(i) for i in infos)
 
     def _spawn_dict(self, blueprint, transform, attach_to):
+        transform = self._wire_spawn_transform(blueprint.id, blueprint.kind, transform, attach_to)
         return {'type': 'spawn', 'blueprint': blueprint.id, 'transform': to_wire_pose(transform),
                 'attributes': blueprint.spawn_attributes(), 'parent': attach_to.id if attach_to is not None else 0}
 
@@ -453,6 +618,16 @@ class World:
     def get_traffic_light(self, landmark):
         """The traffic light actor of a landmark (its OpenDRIVE signal id), None if none."""
         return self._lights_by_signal().get(landmark.id)
+
+    def get_traffic_sign(self, landmark):
+        """The traffic sign actor of a landmark (its OpenDRIVE signal id), None if none: as
+        CARLA's. Lockstep's services spawn no sign actors, so only lights have actors."""
+        for a in self.get_actors().filter('traffic.*'):
+            if a.type_id.startswith('traffic.traffic_light'):
+                continue
+            if str(a.attributes.get('opendrive_id', '')) == str(landmark.id):
+                return a
+        return None
 
     def get_traffic_light_from_opendrive_id(self, traffic_light_id):
         return self._lights_by_signal().get(str(traffic_light_id))

@@ -1,29 +1,43 @@
-"""airsim.MultirotorClient over Lockstep: NED metres from each drone's spawn point, as
-AirSim reports a vehicle relative to its start. *Async calls return a future whose join()
-waits until air_sim reports the command finished (in synchronous mode it ticks the world)."""
+"""airsim.VehicleClient / MultirotorClient / CarClient over Lockstep.
+
+Coordinates are AirSim's: each vehicle's NED metres from its own start (its home), body
+FRD; the world NED of simAddVehicle, settings.json and the plotting calls is the player
+start's (docs/compatibility.md). *Async calls return a future whose join() waits until
+air_sim reports the command finished (in synchronous mode it ticks the world).
+
+One state per process (per DDS session): API control, camera poses, the settings.json
+vehicles and the sensors attached to them belong to the vehicle, whichever client of the
+process asks, as they belong to the server in AirSim."""
+import logging
 import math
 import os
+import re
+import struct
 import threading
 import time
 import weakref
 import zlib
-import struct
 
 import numpy as np
 
 import lockstep
 
-from .types import (AngleLevelControllerGains, AngleRateControllerGains, BarometerData, CollisionInfo,
-                    DistanceSensorData, DrivetrainType, GeoPoint, GpsData, ImageResponse, ImageType, ImuData,
-                    KinematicsState, LandedState, LidarData, MagnetometerData, MultirotorState, Pose,
-                    PositionControllerGains, Quaternionr, RotorStates, Vector3r, VelocityControllerGains,
-                    WeatherParameter, YawMode)
+from . import geometry as geo
+from . import settings as settings_mod
+from .types import (AngleLevelControllerGains, AngleRateControllerGains, BarometerData, Box2D, Box3D, CameraInfo,
+                    CarState, CollisionInfo, DetectionInfo, DistanceSensorData, DrivetrainType, EnvironmentState,
+                    GeoPoint, GpsData, ImageRequest, ImageResponse, ImageType, ImuData, KinematicsState, LandedState,
+                    LidarData, MagnetometerData, MultirotorState, Pose, PositionControllerGains, ProjectionMatrix,
+                    Quaternionr, RCData, RotorStates, Vector2r, Vector3r, VelocityControllerGains, WeatherParameter,
+                    YawMode, _rotate_vector, to_eularian_angles)
 
-__all__ = ['MultirotorClient', 'VehicleClient', 'LockstepUnsupported']
+__all__ = ['VehicleClient', 'MultirotorClient', 'CarClient', 'LockstepUnsupported']
+
+log = logging.getLogger('lockstep.airsim')
 
 
 class LockstepUnsupported(RuntimeError):
-    """An airsim call Lockstep cannot do (yet); the message names the call and why."""
+    """An airsim call Lockstep cannot do; the message names the call and why."""
 
 
 def _unsupported(call, why):
@@ -39,73 +53,184 @@ def _q(t):
     return Quaternionr(x, y, z, w)
 
 
+# --------------------------------------------------------------------------- futures
 class _Future:
-    """What AirSim's *Async calls return: join() blocks until the command finished."""
+    """What AirSim's *Async calls return. join() blocks until air_sim reports the command
+    finished: True when it completed, False when it timed out or was cancelled (AirSim's
+    bool); a rejected command raises CommandRejected with air_sim's reason. While it
+    waits, every 10 s of wall time without progress it logs what the vehicle is doing, so a
+    command that cannot complete (a target the drone cannot reach) is visible."""
 
-    def __init__(self, native):
-        self._f = native
+    _REPORT_S = 10.0
+
+    def __init__(self, shared, native, name, call):
+        self._shared, self._f, self._name, self._call = shared, native, name, call
+        self._result = None
 
     def join(self):
-        return self._f.join()
+        if self._result is not None:
+            return self._result
+        client = self._shared.client
+        start = last = time.monotonic()
+        while True:
+            try:
+                client.wait_drone(self._f.actor, self._f.command_id, 1.0)
+                break
+            except lockstep.ClientError as e:
+                if 'not finished within' not in str(e):
+                    raise
+            now = time.monotonic()
+            if now - last >= self._REPORT_S:
+                last = now
+                self._report(now - start)
+        self._result = bool(self._f.join())
+        return self._result
+
+    def _report(self, waited):
+        try:
+            s = self._shared.mc.state(self._name)
+            p, v = s['position'], s['linear_velocity']
+            c = s['collision']
+            what = 'at (%.1f, %.1f, %.1f) m NED, %.2f m/s' % (p[0], p[1], p[2], math.sqrt(sum(x * x for x in v)))
+            if c[0] or c[6]:
+                what += ', last contact with %s' % (c[6] or 'something')
+            log.warning("airsim: %s on vehicle '%s' still running after %.0f s (%s); AirSim's timeout_sec bounds it",
+                        self._call, self._name, waited, what)
+        except Exception:  # noqa: BLE001 - a report must never break the wait
+            pass
+
+    def get(self):
+        return self.join()
+
+    @property
+    def result(self):
+        return self.join()
 
     def status(self):
         return self._f.status()
 
 
-# AirSim's camera names -> mount pose on the drone (FLU body, m / deg pitch), as its default multirotor.
-_CAMERAS = {'0': ((0.25, 0, 0), 0), 'front_center': ((0.25, 0, 0), 0), '1': ((0.25, -0.05, 0), 0),
-            'front_right': ((0.25, -0.05, 0), 0), '2': ((0.25, 0.05, 0), 0), 'front_left': ((0.25, 0.05, 0), 0),
-            '3': ((0, 0, -0.1), -90), 'bottom_center': ((0, 0, -0.1), -90), '4': ((-0.25, 0, 0), 180),
-            'back_center': ((-0.25, 0, 0), 180)}
-_IMAGE_BLUEPRINTS = {ImageType.Scene: 'sensor.camera.rgb', ImageType.DepthPlanar: 'sensor.camera.depth',
-                     ImageType.DepthPerspective: 'sensor.camera.depth', ImageType.DepthVis: 'sensor.camera.depth',
-                     ImageType.Segmentation: 'sensor.camera.semantic_segmentation',
-                     ImageType.SurfaceNormals: 'sensor.camera.normals'}
+class _DoneFuture:
+    """A command AirSim completes at once (duration <= 0): join() returns `value`."""
+
+    def __init__(self, value=True):
+        self._value = value
+
+    def join(self):
+        return self._value
+
+    get = join
+
+    @property
+    def result(self):
+        return self._value
+
+    def status(self):
+        return 'COMPLETED'
 
 
-def _png(rgb):
-    h, w = rgb.shape[:2]
-    raw = np.concatenate([np.zeros((h, 1), dtype=np.uint8), rgb.reshape(h, w * 3)], axis=1).tobytes()
+class _TimedFuture:
+    """moveByManualAsync: completes after `duration` s of simulation time."""
+
+    def __init__(self, shared, end_time):
+        self._shared, self._end = shared, end_time
+
+    def join(self):
+        c = self._shared.client
+        while self._shared.sim_time() < self._end:
+            if self._shared.synchronous():
+                c.tick()
+            else:
+                c.wait_for_tick(10.0)
+        return True
+
+    get = join
+
+    def status(self):
+        return 'COMPLETED' if self._shared.sim_time() >= self._end else 'RUNNING'
+
+
+# --------------------------------------------------------------------------- cameras
+# AirSim's multirotor cameras (BP_FlyingPawn): name -> mount (x, y, z m FRD; roll, pitch, yaw deg).
+_DEFAULT_CAMERAS = {
+    'front_center': (0.25, 0.0, 0.0, 0.0, 0.0, 0.0),
+    'front_right': (0.25, 0.05, 0.0, 0.0, 0.0, 0.0),
+    'front_left': (0.25, -0.05, 0.0, 0.0, 0.0, 0.0),
+    'bottom_center': (0.0, 0.0, 0.1, 0.0, -90.0, 0.0),
+    'back_center': (-0.25, 0.0, 0.0, 0.0, 0.0, 180.0),
+    'fpv': (0.25, 0.0, 0.0, 0.0, 0.0, 0.0),
+}
+_CAMERA_ALIASES = {'0': 'front_center', '1': 'front_right', '2': 'front_left', '3': 'bottom_center',
+                   '4': 'back_center', '': 'front_center'}
+_IMAGE_TYPE_NAMES = {ImageType.Scene: 'Scene', ImageType.DepthPlanar: 'DepthPlanar',
+                     ImageType.DepthPerspective: 'DepthPerspective', ImageType.DepthVis: 'DepthVis',
+                     ImageType.DisparityNormalized: 'DisparityNormalized', ImageType.Segmentation: 'Segmentation',
+                     ImageType.SurfaceNormals: 'SurfaceNormals', ImageType.Infrared: 'Infrared'}
+
+
+def _png(img):
+    """PNG bytes of an (h, w, 4) RGBA or (h, w) grey uint8 image (AirSim's compressed images are RGBA)."""
+    img = np.ascontiguousarray(img, dtype=np.uint8)
+    h, w = img.shape[:2]
+    channels = 1 if img.ndim == 2 else img.shape[2]
+    color_type = {1: 0, 3: 2, 4: 6}[channels]
+    raw = np.concatenate([np.zeros((h, 1), dtype=np.uint8), img.reshape(h, w * channels)], axis=1).tobytes()
 
     def chunk(tag, data):
         c = struct.pack('>I', len(data)) + tag + data
         return c + struct.pack('>I', zlib.crc32(tag + data) & 0xffffffff)
 
-    return (b'\x89PNG\r\n\x1a\n' + chunk(b'IHDR', struct.pack('>IIBBBBB', w, h, 8, 2, 0, 0, 0)) +
+    return (b'\x89PNG\r\n\x1a\n' + chunk(b'IHDR', struct.pack('>IIBBBBB', w, h, 8, color_type, 0, 0, 0)) +
             chunk(b'IDAT', zlib.compress(raw, 3)) + chunk(b'IEND', b''))
 
 
-def _quat_yaw_pitch(yaw, pitch):
-    """ENU quaternion (w, x, y, z) from heading and pitch (rad, FLU: pitch > 0 nose down)."""
-    cy, sy = math.cos(yaw / 2), math.sin(yaw / 2)
-    cp, sp = math.cos(pitch / 2), math.sin(pitch / 2)
-    return (cy * cp, -sy * sp, cy * sp, sy * cp)
+def _flow_vis(flow):
+    """AirSim's OpticalFlowVis: hue = direction, saturation = magnitude (Middlebury style), BGR uint8."""
+    fx, fy = flow[..., 0], flow[..., 1]
+    mag = np.sqrt(fx * fx + fy * fy)
+    scale = max(float(mag.max()), 1e-6)
+    ang = (np.arctan2(-fy, -fx) / np.pi + 1) / 2  # 0..1
+    h6 = ang * 6
+    i = np.floor(h6).astype(int) % 6
+    f = h6 - np.floor(h6)
+    s = np.clip(mag / scale, 0, 1)
+    v = np.ones_like(s)
+    p, qv, t = v * (1 - s), v * (1 - s * f), v * (1 - s * (1 - f))
+    r = np.choose(i, [v, qv, p, p, t, v])
+    g = np.choose(i, [t, v, v, qv, p, p])
+    b = np.choose(i, [p, p, t, v, v, qv])
+    return (np.stack([b, g, r], axis=-1) * 255).astype(np.uint8)
 
 
-class _AttachedSensors:
-    """Sensors AirSim declares in settings.json are spawned here on first use, attached to
-    the drone, and listened to; each get*Data returns the newest sample. One set per DDS
-    session (every MultirotorClient of a process shares it): a drone's IMU is spawned once,
-    lives as long as the drone, and goes with it (or with the run)."""
+# --------------------------------------------------------------------------- shared state
+class _Sensors:
+    """Sensors spawned on the vehicles on first use (from settings.json or AirSim's
+    defaults), listened to; latest() returns the newest sample. One set per session and run."""
 
-    def __init__(self, client):
-        self._client_ref = weakref.ref(client)   # the session holds the listeners, not the other way
-        self._sensors = {}  # (vehicle actor, blueprint, name) -> [actor id, latest sample]
-        self._lock = threading.Lock()
-        self._cv = threading.Condition(self._lock)
+    def __init__(self, shared):
+        self._shared = weakref.proxy(shared)
+        self._slots = {}   # key -> [actor id, latest sample, spec]
+        self._cv = threading.Condition()
 
-    def latest(self, call, actor, blueprint, name, attributes=None, pose=(0, 0, 0, 1, 0, 0, 0)):
-        key = (actor, blueprint, name)
-        c = self._client_ref()
-        if key not in self._sensors:
+    def latest(self, call, key, blueprint, attributes, pose, parent, newer_than=None):
+        """The newest sample of the sensor `key` (spawned with blueprint/attributes/pose on
+        `parent` the first time; respawned when they change)."""
+        c = self._shared.client
+        spec = (blueprint, tuple(sorted(attributes.items())), tuple(round(v, 9) for v in pose), parent)
+        slot = self._slots.get(key)
+        if slot is not None and slot[2] != spec:
+            try:
+                c.destroy(slot[0])
+            except lockstep.ClientError:
+                pass
+            slot = None
+        if slot is None:
             declared = {d['id'] for d in c.blueprints(1.0)}
             if blueprint not in declared:
                 _unsupported(call, "no running service declares '%s' (start the sensors/render services)" % blueprint)
-            attrs = dict(attributes or {})
-            attrs.setdefault('role_name', name or blueprint.split('.')[-1])
-            sensor = c.spawn(blueprint, pose, attrs, actor)
-            slot = [sensor, None]
-            self._sensors[key] = slot
+            sensor = c.spawn(blueprint, pose, dict(attributes), parent)
+            slot = [sensor, None, spec]
+            self._slots[key] = slot
 
             def on_data(sample, slot=slot):
                 with self._cv:
@@ -113,53 +238,314 @@ class _AttachedSensors:
                     self._cv.notify_all()
 
             c.listen(sensor, on_data)
-        slot = self._sensors[key]
-        deadline = time.monotonic() + 10.0
+        deadline = time.monotonic() + 20.0
         while True:
             with self._cv:
-                if slot[1] is not None:
-                    return slot[1]
-            if c.world_info()['settings']['synchronous_mode']:
+                s = slot[1]
+                if s is not None and (newer_than is None or s.frame > newer_than):
+                    return s
+            if self._shared.synchronous():
                 c.tick()
             else:
                 with self._cv:
                     self._cv.wait(0.1)
             if time.monotonic() > deadline:
-                raise lockstep.ClientError('%s: sensor %s (%s) delivered no data within 10 s' % (call, slot[0], blueprint))
+                raise lockstep.ClientError('%s: sensor %s (%s) delivered no data within 20 s' % (call, slot[0], blueprint))
+
+    def drop(self, predicate):
+        for key in [k for k in self._slots if predicate(k)]:
+            slot = self._slots.pop(key)
+            try:
+                self._shared.client.destroy(slot[0])
+            except lockstep.ClientError:
+                pass
 
 
-_attached = weakref.WeakKeyDictionary()   # session (lockstep.Client) -> its (run, _AttachedSensors)
-_attached_lock = threading.Lock()
+class _Shared:
+    """A process's AirSim-side state over its DDS session (see the module docstring)."""
+
+    def __init__(self, client):
+        self.client = client
+        self.mc = lockstep.Multirotor(client)
+        self.lock = threading.RLock()
+        self.settings = None
+        self.run = None
+        self.sensors = None
+        self.player_start = None
+        self.cameras = {}       # (actor, camera) -> {'pose': (x y z roll pitch yaw), 'fov': deg}
+        self.manual = {}        # actor -> (vx_max, vy_max, z_min, end_time, drivetrain, yaw_mode)
+        self.rc = {}            # actor -> RCData
+        self.trace = {}         # actor -> (rgba, thickness)
+        self.seg_ids = {}       # object name -> id (simSetSegmentationObjectID)
+        self.detection = {}     # (actor, camera, image_type) -> {'filters': [...], 'radius_cm': ...}
+        self.recording = False
+        self.weather_enabled = False
+        self.time_of_day = None
+        self.spawned_objects = {}  # name -> actor id (simSpawnObject)
+        self.markers = []          # plotted markers (kept for simFlushPersistentMarkers)
+
+    # --- settings and the run ---
+    def load_settings(self):
+        if self.settings is None:
+            self.settings = settings_mod.load()
+        return self.settings
+
+    def synchronous(self):
+        return self.client.world_info()['settings']['synchronous_mode']
+
+    def sim_time(self):
+        return self.client.frame() * self.client.world_info()['settings']['fixed_delta_seconds']
+
+    def wait_frames(self, n=1):
+        for _ in range(n):
+            if self.synchronous():
+                self.client.tick()
+            else:
+                self.client.wait_for_tick(10.0)
+
+    def begin_run(self):
+        """Per run: settings read, clock speed and wind applied, sensors reset."""
+        run = self.client.world_info()['run']
+        if run == self.run:
+            return
+        s = self.load_settings()
+        self.run = run
+        self.sensors = _Sensors(self)
+        self.player_start = None
+        self.cameras.clear()
+        self.manual.clear()
+        self.spawned_objects.clear()
+        if s.path:
+            info = self.client.world_info()['settings']
+            if abs(info.get('real_time_factor', 1.0) - s.clock_speed) > 1e-9 and s.clock_speed != 1.0:
+                self.client.apply_settings({'real_time_factor': s.clock_speed})
+            if any(s.wind) and self.drones():
+                self.mc.set_wind(s.wind)
+
+    def drones(self):
+        return [a for a in self.client.actors() if a['kind'] == 'drone']
+
+    # --- the player start: where AirSim's vehicles start ---
+    def start(self):
+        """The player start (world ENU, on the ground): the sidewalk point nearest the map's
+        first vehicle spawn point that is 6 m or more from every vehicle spawn point and 3 m
+        from every actor, so no car spawned there hits the drone ($LOCKSTEP_DRONE_SPAWN=x,y,z
+        sets it)."""
+        if self.player_start is not None:
+            return self.player_start
+        env = os.environ.get('LOCKSTEP_DRONE_SPAWN')
+        if env:
+            v = [float(p) for p in env.split(',')]
+            self.player_start = (v[0], v[1], v[2])
+            return self.player_start
+        try:
+            m = self.client.map()
+            spawns = [tuple(p[:3]) for p in m.spawn_points(2.0)]
+            walks = [tuple(p[:3]) for p in m.pedestrian_spawn_points(5.0)]
+        except lockstep.ClientError:
+            spawns, walks = [], []
+        others = []
+        for st in self.client.states().values():
+            t = st.get('transform')
+            if t:
+                others.append(tuple(t[:3]))
+
+        def d2(a, b):
+            return (a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2
+
+        ref = spawns[0] if spawns else (0.0, 0.0, 0.0)
+        best = None
+        for p in sorted(walks, key=lambda p: (d2(p, ref), p)):
+            if all(d2(p, s) >= 36.0 for s in spawns) and all(d2(p, o) >= 9.0 for o in others):
+                best = p
+                break
+        # Map spawn points stand above the surface: sidewalk ones 1 m (a walker's centre), road ones 0.5 m.
+        self.player_start = (best[0], best[1], best[2] - 1.0) if best else (ref[0], ref[1], ref[2] - (0.5 if spawns else 0))
+        return self.player_start
+
+    def free_at(self, enu, clearance=1.5):
+        for st in self.client.states().values():
+            t = st.get('transform')
+            if t and (t[0] - enu[0]) ** 2 + (t[1] - enu[1]) ** 2 < clearance ** 2 and abs(t[2] - enu[2]) < 3:
+                return False
+        return True
+
+    # --- vehicles ---
+    def ensure_vehicles(self):
+        """AirSim's vehicles exist from the start: the settings' AutoCreate vehicles (or the
+        default SimpleFlight when no drone is there) are spawned at their poses the first time
+        a client needs one."""
+        with self.lock:
+            self.begin_run()
+            s = self.load_settings()
+            have = set(self.mc.list_vehicles())
+            drones_present = bool(self.drones())
+            created = []
+            for v in s.all_vehicles():
+                if v.mode != 'Multirotor' or not v.auto_create or v.name in have:
+                    continue
+                if not s.vehicles and drones_present:
+                    continue  # a drone is there already: AirSim's single default vehicle
+                created.append(self.spawn_vehicle(v.name, (v.x, v.y, v.z), (v.roll, v.pitch, v.yaw)))
+            if created:
+                self.wait_at_rest(created)
+                if any(s.wind):
+                    self.mc.set_wind(s.wind)
+
+    def spawn_vehicle(self, name, ned, rpy_deg):
+        sx, sy, sz = self.start()
+        x, y, z = geo.ned_to_enu_pos(ned, (sx, sy, sz + 0.2))
+        if not self.free_at((x, y, z)):
+            raise lockstep.ClientError("vehicle '%s': its start (%.1f, %.1f, %.1f) overlaps an actor" % (name, x, y, z))
+        q = geo.ned_to_enu_quat(geo.frd_euler_deg_to_quat(*rpy_deg))
+        return self.mc.add_vehicle(name, 'drone.generic_quad', (x, y, z) + tuple(q))
+
+    def wait_at_rest(self, actors, limit_s=10.0):
+        """AirSim's vehicles are at rest when a script starts: wait (at most limit_s of
+        simulation time) until the new drones have settled on the ground (|v| < 0.05 m/s)."""
+        dt = self.client.world_info()['settings']['fixed_delta_seconds'] or 0.05
+        still = {}
+        for _ in range(int(limit_s / dt) + 2):
+            self.wait_frames(1)
+            done = True
+            for a in actors:
+                d = self.client.drone_state(a)
+                if d is None:
+                    done = False
+                    continue
+                speed = math.sqrt(sum(x * x for x in d['velocity']))
+                still[a] = still.get(a, 0) + 1 if speed < 0.05 else 0
+                done = done and still[a] >= 3
+            if done:
+                return
+
+    def actor(self, name):
+        self.ensure_vehicles()
+        return self.mc.resolve(name)
+
+    def vehicle_setting(self, name):
+        s = self.load_settings()
+        if name in s.vehicles:
+            return s.vehicles[name]
+        if not name:
+            vs = s.all_vehicles()
+            try:
+                first = self.mc.list_vehicles()[0]
+            except IndexError:
+                first = None
+            for v in vs:
+                if v.name == first:
+                    return v
+            return vs[0] if not s.vehicles else None
+        return None
+
+    # --- geodesy (the map's geo-reference; settings' OriginGeopoint at the player start) ---
+    def _geo_ref(self):
+        lat = lon = 0.0
+        try:
+            for token in self.client.map().geo_reference.split():
+                key, _, value = token.partition('=')
+                if key == '+lat_0':
+                    lat = float(value)
+                elif key == '+lon_0':
+                    lon = float(value)
+        except (lockstep.ClientError, ValueError):
+            pass
+        return lat, lon
+
+    def enu_to_geo(self, x, y, z):
+        """CARLA's projection (the GNSS sensor's), shifted so that the player start is the
+        settings' OriginGeopoint when it is given."""
+        lat0, lon0 = self._geo_ref()
+        r = 6378137.0
+        scale = math.cos(math.radians(lat0))
+        mx = scale * math.radians(lon0) * r + x
+        my = scale * r * math.log(math.tan(math.radians(90.0 + lat0) / 2.0)) + y
+        lon = mx * 180.0 / (math.pi * r * scale)
+        lat = 360.0 * math.atan(math.exp(my / (r * scale))) / math.pi - 90.0
+        return self.geo_shift((lat, lon, z))
+
+    def geo_shift(self, g, inverse=False):
+        s = self.load_settings()
+        if s.origin_geopoint is None:
+            return g
+        sx, sy, sz = self.start()
+        o = s.origin_geopoint
+        saved, s.origin_geopoint = s.origin_geopoint, None
+        try:
+            base = self.enu_to_geo(sx, sy, sz)
+        finally:
+            s.origin_geopoint = saved
+        k = -1 if inverse else 1
+        return (g[0] + k * (o[0] - base[0]), g[1] + k * (o[1] - base[1]), g[2] + k * (o[2] - base[2]))
+
+    def geo_to_enu(self, lat, lon, alt):
+        lat, lon, alt = self.geo_shift((lat, lon, alt), inverse=True)
+        lat0, lon0 = self._geo_ref()
+        r = 6378137.0
+        scale = math.cos(math.radians(lat0))
+        mx0 = scale * math.radians(lon0) * r
+        my0 = scale * r * math.log(math.tan(math.radians(90.0 + lat0) / 2.0))
+        mx = scale * math.radians(lon) * r
+        my = scale * r * math.log(math.tan(math.radians(90.0 + lat) / 2.0))
+        return mx - mx0, my - my0, alt
 
 
-# AirSim 1.8's ImuSimpleParams: gyro bias stability 4.6 deg/h, accel 36 ug (SI units).
-_AIRSIM_IMU_ATTRIBUTES = {'noise_gyro_bias_stability': repr(4.6 / 3600 * math.pi / 180),
-                          'noise_accel_bias_stability': repr(36e-6 * 9.80665)}
+_shared_by_session = weakref.WeakKeyDictionary()
+_shared_lock = threading.Lock()
 
 
-def _attached_sensors(client):
-    """The session's attached sensors of its current run (a reset starts a new set)."""
-    run = client.world_info()['run']
-    with _attached_lock:
-        entry = _attached.get(client)
-        if entry is None or entry[0] != run:
-            entry = (run, _AttachedSensors(client))
-            _attached[client] = entry
-        return entry[1]
+def _shared(client):
+    with _shared_lock:
+        s = _shared_by_session.get(client)
+        if s is None:
+            s = _Shared(client)
+            _shared_by_session[client] = s
+        return s
 
 
-class MultirotorClient:
+def _dur(d):
+    return d is not None and d > 0
+
+
+# --------------------------------------------------------------------------- VehicleClient
+class VehicleClient:
+    """AirSim's VehicleClient: the calls every vehicle has."""
+
     def __init__(self, ip='', port=41451, timeout_value=3600):
-        self._ip, self._port = ip, port
+        self._ip, self._port, self._timeout = ip, port, timeout_value
         self._client = lockstep.session(timeout=float(os.environ.get('LOCKSTEP_CONNECT_TIMEOUT', '10')))
-        self._mc = lockstep.Multirotor(self._client)
-        self._paused_from = None   # settings before simPause(True)
-        self._weather = {}
+        self._s = _shared(self._client)
+        self._mc = self._s.mc
+        self._s.load_settings()   # a bad settings.json fails here, naming the key, as AirSim fails to start
 
-    # --- connection and vehicles ---
-    def confirmConnection(self):
-        info = self._client.world_info()
-        print('Connected to Lockstep (DDS domain %d, map %s, run %d)' % (self._client.domain, info['map_name'], info['run']))
+    # --- connection ---
+    def reset(self):
+        """AirSim's reset: every vehicle back to its start (its settings pose), at rest,
+        disarmed and without API control, its command cancelled; the rest of the world
+        (cars, walkers, lights) goes on."""
+        s = self._s
+        with s.lock:
+            s.ensure_vehicles()
+            actors = []
+            for a in s.drones():
+                name = a['attributes'].get('role_name') or 'Drone%d' % a['id']
+                try:
+                    self._mc.enable_api_control(True, name)
+                    self._mc.cancel(name)
+                    k = (0.0, 0.0, 0.0)
+                    home = self._client.drone_state(a['id'])['home']
+                    q = geo.enu_to_ned_quat(home[3:7])
+                    self._mc.set_kinematics(k, (q.w_val, q.x_val, q.y_val, q.z_val), k, k, name)
+                    self._mc.arm_disarm(False, name)
+                finally:
+                    self._mc.enable_api_control(False, name)
+                actors.append(a['id'])
+            s.manual.clear()
+            s.rc.clear()
+            s.cameras.clear()
+            s.wait_frames(2)
+            s.wait_at_rest(actors, 5.0)
 
     def ping(self):
         return True
@@ -176,204 +562,1031 @@ class MultirotorClient:
     def getMinRequiredClientVersion(self):
         return 1
 
-    def _drone(self, vehicle_name):
-        try:
-            return self._mc.resolve(vehicle_name)
-        except lockstep.ClientError:
-            if self._client.actors() and any(a['kind'] == 'drone' for a in self._client.actors()):
-                raise
-        # AirSim always starts with a drone ("SimpleFlight"): spawn one at the map's first spawn point.
-        name = vehicle_name or 'SimpleFlight'
-        x, y, z, yaw = self._default_spawn()
-        self._mc.add_vehicle(name, 'drone.generic_quad', (x, y, z) + _quat_yaw_pitch(yaw, 0))
-        self._settle()
-        return self._mc.resolve(vehicle_name)
+    def confirmConnection(self):
+        print('Connected!' if self.ping() else 'Ping returned false!')
+        print('Client Ver:%d (Min Req: %d), Server Ver:%d (Min Req: %d)' % (
+            self.getClientVersion(), self.getMinRequiredClientVersion(), self.getServerVersion(),
+            self.getMinRequiredServerVersion()))
+        info = self._client.world_info()
+        print('(Lockstep: DDS domain %d, map %s, run %d)' % (self._client.domain, info['map_name'], info['run']))
+        print('')
 
-    def _default_spawn(self):
-        env = os.environ.get('LOCKSTEP_DRONE_SPAWN')  # "x,y,z[,yaw_deg]" in world ENU
-        if env:
-            v = [float(p) for p in env.split(',')]
-            return v[0], v[1], v[2], math.radians(v[3]) if len(v) > 3 else 0.0
-        try:
-            p = self._client.map().spawn_points(25.0)[0]
-            return p[0], p[1], 0.0, p[3]
-        except lockstep.ClientError:
-            return 0.0, 0.0, 0.0, 0.0
-
-    def _settle(self):
-        """Wait until the drone appears in the air state (one tick in synchronous mode)."""
-        if self._client.world_info()['settings']['synchronous_mode']:
-            self._client.tick()
-        else:
-            self._client.wait_for_tick(10.0)
-            self._client.wait_for_tick(10.0)
-
-    def listVehicles(self):
-        return self._mc.list_vehicles()
-
-    def simAddVehicle(self, vehicle_name, vehicle_type, pose, pawn_path=''):
-        """Spawns a drone; pose is NED from the first drone's home (AirSim's world NED)."""
-        if vehicle_type.lower() not in ('simpleflight', 'px4multirotor', 'arducopter', ''):
-            _unsupported('simAddVehicle(%r)' % vehicle_type, 'Lockstep simulates multirotors only on the AirSim side')
-        try:
-            home = self._mc.home('')
-        except lockstep.ClientError:
-            x, y, z, _ = self._default_spawn()
-            home = (x, y, z)
-        p = pose.position
-        x, y, z = home[0] + p.y_val, home[1] + p.x_val, home[2] - p.z_val
-        yaw = math.radians(90) - self._yaw_of(pose.orientation)
-        self._mc.add_vehicle(vehicle_name, 'drone.generic_quad', (x, y, z) + _quat_yaw_pitch(yaw, 0))
-        self._settle()
-        return True
-
-    @staticmethod
-    def _yaw_of(q):
-        from .types import to_eularian_angles
-        return to_eularian_angles(q)[2]
-
-    def reset(self):
-        self._client.reset(0)
-
+    # --- API control and arming: the vehicle's, whichever client asks ---
     def enableApiControl(self, is_enabled, vehicle_name=''):
-        self._drone(vehicle_name)
-        self._mc.enable_api_control(is_enabled, vehicle_name)
+        self._s.actor(vehicle_name)
+        self._mc.enable_api_control(bool(is_enabled), vehicle_name)
 
     def isApiControlEnabled(self, vehicle_name=''):
+        self._s.actor(vehicle_name)
         return self._mc.is_api_control_enabled(vehicle_name)
 
     def armDisarm(self, arm, vehicle_name=''):
-        self._drone(vehicle_name)
-        return self._mc.arm_disarm(arm, vehicle_name)
+        """As AirSim's simple_flight: without API control the vehicle is not armed (nor
+        disarmed) and the call returns False; nor is a vehicle that is not landed disarmed."""
+        self._s.actor(vehicle_name)
+        if not self._mc.is_api_control_enabled(vehicle_name):
+            log.warning("airsim: vehicle '%s' cannot be %s via API because API has not been given control",
+                        vehicle_name or 'default', 'armed' if arm else 'disarmed')
+            return False
+        if not arm and not self._mc.state(vehicle_name)['landed']:
+            log.warning("airsim: vehicle '%s' cannot be disarmed because it is not landed", vehicle_name or 'default')
+            return False
+        return self._mc.arm_disarm(bool(arm), vehicle_name)
 
     # --- the clock ---
     def simPause(self, is_paused):
         """Paused = synchronous mode: the clock stops until simContinueFor* ticks it."""
-        s = self._client.world_info()['settings']
-        if is_paused and not s['synchronous_mode']:
-            self._paused_from = s
+        sync = self._s.synchronous()
+        if is_paused and not sync:
             self._client.apply_settings({'synchronous_mode': True})
-        elif not is_paused and s['synchronous_mode']:
+        elif not is_paused and sync:
             self._client.apply_settings({'synchronous_mode': False})
 
     def simIsPause(self):
-        return self._client.world_info()['settings']['synchronous_mode']
+        return self._s.synchronous()
 
     def simContinueForTime(self, seconds):
         dt = self._client.world_info()['settings']['fixed_delta_seconds']
         self.simContinueForFrames(max(1, int(round(seconds / dt))))
 
     def simContinueForFrames(self, frames):
-        was_paused = self.simIsPause()
-        if not was_paused:
+        """Runs `frames` ticks and leaves the simulation paused, as AirSim."""
+        if not self._s.synchronous():
             self.simPause(True)
         for _ in range(int(frames)):
             self._client.tick()
-        if not was_paused:
-            self.simPause(False)
 
     def simGetTime(self):
-        return self._client.frame() * self._client.world_info()['settings']['fixed_delta_seconds']
+        return self._s.sim_time()
 
-    # --- commands ---
-    def takeoffAsync(self, timeout_sec=20, vehicle_name=''):
-        self._drone(vehicle_name)
-        return _Future(self._mc.takeoff(timeout_sec, vehicle_name))
+    def getHomeGeoPoint(self, vehicle_name=''):
+        """The vehicle's home (its start) through the map's geo-reference."""
+        a = self._s.actor(vehicle_name)
+        h = self._client.drone_state(a)
+        if h is None:
+            _unsupported('getHomeGeoPoint(%r)' % vehicle_name, 'the vehicle has no air state yet')
+        return GeoPoint(*self._s.enu_to_geo(*h['home'][:3]))
 
-    def landAsync(self, timeout_sec=60, vehicle_name=''):
-        return _Future(self._mc.land(timeout_sec, vehicle_name))
+    # --- environment ---
+    def simSetLightIntensity(self, light_name, intensity):
+        _unsupported('simSetLightIntensity', 'the towns have no named lights (the sun is the weather)')
 
-    def goHomeAsync(self, timeout_sec=3e+38, vehicle_name=''):
-        return _Future(self._mc.go_home(timeout_sec, vehicle_name))
+    def simSwapTextures(self, tags, tex_id=0, component_id=0, material_id=0):
+        _unsupported('simSwapTextures', 'the render service has no texture sets to swap')
 
-    def hoverAsync(self, vehicle_name=''):
-        return _Future(self._mc.hover(vehicle_name))
+    def simSetObjectMaterial(self, object_name, material_name, component_id=0):
+        _unsupported('simSetObjectMaterial', 'the render service has no Unreal materials')
 
+    def simSetObjectMaterialFromTexture(self, object_name, texture_path, component_id=0):
+        _unsupported('simSetObjectMaterialFromTexture', 'the render service has no Unreal materials')
+
+    def simSetTimeOfDay(self, is_enabled, start_datetime='', is_start_datetime_dst=False, celestial_clock_speed=1,
+                        update_interval_secs=60, move_sun=True):
+        """The sun's position for a date and time at the origin geo point (CARLA's sun angles)."""
+        self._s.time_of_day = bool(is_enabled)
+        if not is_enabled or not move_sun:
+            return
+        import datetime
+        when = datetime.datetime.strptime(start_datetime, '%Y-%m-%d %H:%M:%S') if start_datetime else \
+            datetime.datetime(2020, 6, 21, 12, 0, 0)
+        if is_start_datetime_dst:
+            when -= datetime.timedelta(hours=1)
+        sx, sy, sz = self._s.start()
+        lat, lon, _ = self._s.enu_to_geo(sx, sy, sz)
+        alt, azi = _sun_position(when, lat, lon)
+        self._client.set_weather({'sun_altitude_angle': alt, 'sun_azimuth_angle': azi})
+
+    def simEnableWeather(self, enable):
+        self._s.weather_enabled = bool(enable)
+
+    def simSetWeatherParameter(self, param, val):
+        """AirSim's weather (0..1) on CARLA's WeatherParameters (0..100)."""
+        fields = {WeatherParameter.Rain: 'precipitation', WeatherParameter.Roadwetness: 'wetness',
+                  WeatherParameter.Fog: 'fog_density', WeatherParameter.Dust: 'dust_storm'}
+        if param == WeatherParameter.Enabled:
+            self._s.weather_enabled = bool(val)
+            return
+        if param not in fields:
+            _unsupported('simSetWeatherParameter(%d)' % param, 'snow and leaves are not rendered')
+        self._client.set_weather({fields[param]: float(min(max(val, 0.0), 1.0)) * 100.0})
+
+    # --- images ---
+    def _camera(self, vehicle_name, camera_name, call):
+        """(actor, canonical camera name, mount (x y z roll pitch yaw, FRD), fov or None, capture settings)."""
+        a = self._s.actor(vehicle_name)
+        v = self._s.vehicle_setting(vehicle_name)
+        name = str(camera_name)
+        cams = dict(_DEFAULT_CAMERAS)
+        name = _CAMERA_ALIASES.get(name, name)
+        cs = v.cameras.get(name) if v else None
+        if name not in cams and cs is None:
+            known = sorted(set(cams) | set(v.cameras if v else ()) | set(_CAMERA_ALIASES) - {''})
+            raise lockstep.ClientError("%s: vehicle '%s' has no camera '%s' (cameras: %s)" % (
+                call, vehicle_name or 'default', camera_name, ', '.join(known)))
+        mount = list(cams.get(name, (0.0,) * 6))
+        if cs is not None:
+            for i, k in enumerate(('x', 'y', 'z', 'roll', 'pitch', 'yaw')):
+                if getattr(cs, k) is not None:
+                    mount[i] = getattr(cs, k)
+        over = self._s.cameras.get((a, name), {})
+        if 'pose' in over:
+            mount = list(over['pose'])
+        return a, name, tuple(mount), over.get('fov'), cs
+
+    def _capture(self, cs, image_type, fov_override):
+        defaults = self._s.load_settings().camera_defaults
+        if cs is not None:
+            c = cs.capture_for(image_type, defaults)
+        else:
+            c = defaults.capture_for(image_type)
+        fov = fov_override if fov_override is not None else c.fov_degrees
+        return c.width, c.height, fov
+
+    def _camera_world(self, actor, vehicle_name, mount):
+        """The camera's pose in the vehicle's NED frame (from its home)."""
+        p, q = self._mc.pose(vehicle_name)
+        mq = geo.frd_euler_deg_to_quat(mount[3], mount[4], mount[5])
+        return geo.compose(_v(p), _q(q), Vector3r(*mount[:3]), mq)
+
+    def simGetImages(self, requests, vehicle_name='', external=False):
+        if external:
+            _unsupported('simGetImages(external=True)', 'external cameras are spawned with the CARLA API')
+        return [self._image(r, vehicle_name, 'simGetImages') for r in requests]
+
+    def simGetImage(self, camera_name, image_type, vehicle_name='', external=False):
+        if external:
+            _unsupported('simGetImage(external=True)', 'external cameras are spawned with the CARLA API')
+        r = self._image(ImageRequest(camera_name, image_type, False, True), vehicle_name, 'simGetImage')
+        return r.image_data_uint8
+
+    def _image(self, r, vehicle_name, call):
+        it = int(r.image_type)
+        if it not in _IMAGE_TYPE_NAMES and it not in (ImageType.OpticalFlow, ImageType.OpticalFlowVis):
+            raise lockstep.ClientError('%s: image_type %r is not one of AirSim\'s (0..9)' % (call, r.image_type))
+        a, cam, mount, fov_over, cs = self._camera(vehicle_name, r.camera_name, call)
+        w, h, fov = self._capture(cs, it, fov_over)
+        attrs = {'image_size_x': str(w), 'image_size_y': str(h), 'fov': repr(float(fov)),
+                 'role_name': 'airsim_%s_%d' % (cam, it)}
+        if it in _IMAGE_TYPE_NAMES:
+            bp = 'sensor.camera.airsim'
+            attrs['image_type'] = _IMAGE_TYPE_NAMES[it]
+        else:
+            bp = 'sensor.camera.optical_flow'
+        pose = geo.frd_mount_to_flu(*mount)
+        s = self._s.sensors.latest(call, ('camera', a, cam, it), bp, attrs, pose, a)
+        resp = ImageResponse()
+        resp.camera_name = str(r.camera_name)
+        resp.image_type = it
+        resp.time_stamp = int(round(s.sim_time * 1e9))
+        resp.frame = s.frame
+        resp.pixels_as_float = bool(r.pixels_as_float)
+        resp.compress = bool(r.compress)
+        try:
+            cp, cq = self._camera_world(a, vehicle_name, mount)
+            resp.camera_position, resp.camera_orientation = cp, cq
+        except lockstep.ClientError:
+            pass
+        arr = np.asarray(s.array())
+        resp.height, resp.width = int(arr.shape[0]), int(arr.shape[1])
+        _encode(resp, it, arr)
+        return resp
+
+    def simGetPresetLensSettings(self, camera_name, vehicle_name='', external=False):
+        _unsupported('simGetPresetLensSettings', "the cameras are pinhole cameras (no CinemAirSim lens)")
+
+    def simGetLensSettings(self, camera_name, vehicle_name='', external=False):
+        _unsupported('simGetLensSettings', "the cameras are pinhole cameras (no CinemAirSim lens)")
+
+    def simSetPresetLensSettings(self, preset_lens_settings, camera_name, vehicle_name='', external=False):
+        _unsupported('simSetPresetLensSettings', "the cameras are pinhole cameras (no CinemAirSim lens)")
+
+    def simGetPresetFilmbackSettings(self, camera_name, vehicle_name='', external=False):
+        _unsupported('simGetPresetFilmbackSettings', "the cameras are pinhole cameras (no CinemAirSim filmback)")
+
+    def simSetPresetFilmbackSettings(self, preset_filmback_settings, camera_name, vehicle_name='', external=False):
+        _unsupported('simSetPresetFilmbackSettings', "the cameras are pinhole cameras (no CinemAirSim filmback)")
+
+    def simGetFilmbackSettings(self, camera_name, vehicle_name='', external=False):
+        _unsupported('simGetFilmbackSettings', "the cameras are pinhole cameras (no CinemAirSim filmback)")
+
+    def simSetFilmbackSettings(self, sensor_width, sensor_height, camera_name, vehicle_name='', external=False):
+        _unsupported('simSetFilmbackSettings', "the cameras are pinhole cameras (no CinemAirSim filmback)")
+
+    def simGetFocalLength(self, camera_name, vehicle_name='', external=False):
+        _unsupported('simGetFocalLength', "the cameras are pinhole cameras (field of view only; simGetCameraInfo)")
+
+    def simSetFocalLength(self, focal_length, camera_name, vehicle_name='', external=False):
+        _unsupported('simSetFocalLength', "the cameras are pinhole cameras (set the field of view: simSetCameraFov)")
+
+    def simEnableManualFocus(self, enable, camera_name, vehicle_name='', external=False):
+        _unsupported('simEnableManualFocus', "the cameras are pinhole cameras (everything is in focus)")
+
+    def simGetFocusDistance(self, camera_name, vehicle_name='', external=False):
+        _unsupported('simGetFocusDistance', "the cameras are pinhole cameras (everything is in focus)")
+
+    def simSetFocusDistance(self, focus_distance, camera_name, vehicle_name='', external=False):
+        _unsupported('simSetFocusDistance', "the cameras are pinhole cameras (everything is in focus)")
+
+    def simGetFocusAperture(self, camera_name, vehicle_name='', external=False):
+        _unsupported('simGetFocusAperture', "the cameras are pinhole cameras (everything is in focus)")
+
+    def simSetFocusAperture(self, focus_aperture, camera_name, vehicle_name='', external=False):
+        _unsupported('simSetFocusAperture', "the cameras are pinhole cameras (everything is in focus)")
+
+    def simEnableFocusPlane(self, enable, camera_name, vehicle_name='', external=False):
+        _unsupported('simEnableFocusPlane', "the cameras are pinhole cameras (everything is in focus)")
+
+    def simGetCurrentFieldOfView(self, camera_name, vehicle_name='', external=False):
+        return '%.2f' % self.simGetCameraInfo(camera_name, vehicle_name, external).fov
+
+    def simGetCameraInfo(self, camera_name, vehicle_name='', external=False):
+        """Pose (the vehicle's NED frame), horizontal FOV (deg) and AirSim's projection matrix."""
+        if external:
+            _unsupported('simGetCameraInfo(external=True)', 'external cameras are spawned with the CARLA API')
+        a, cam, mount, fov_over, cs = self._camera(vehicle_name, camera_name, 'simGetCameraInfo')
+        w, h, fov = self._capture(cs, ImageType.Scene, fov_over)
+        info = CameraInfo()
+        try:
+            p, q = self._camera_world(a, vehicle_name, mount)
+            info.pose = Pose(p, q)
+        except lockstep.ClientError:
+            pass
+        info.fov = float(fov)
+        info.proj_mat = ProjectionMatrix(_projection_matrix(fov, w, h))
+        return info
+
+    def simGetDistortionParams(self, camera_name, vehicle_name='', external=False):
+        self._camera(vehicle_name, camera_name, 'simGetDistortionParams')
+        return [0.0, 0.0, 0.0, 0.0, 0.0]   # K1 K2 K3 P1 P2: the cameras have no lens distortion
+
+    def simSetDistortionParams(self, camera_name, distortion_params, vehicle_name='', external=False):
+        for k, v in distortion_params.items():
+            self.simSetDistortionParam(camera_name, k, v, vehicle_name, external)
+
+    def simSetDistortionParam(self, camera_name, param_name, value, vehicle_name='', external=False):
+        if value != 0:
+            _unsupported('simSetDistortionParam(%s=%r)' % (param_name, value), 'the cameras have no lens distortion')
+
+    def simSetCameraPose(self, camera_name, pose, vehicle_name='', external=False):
+        """The camera's mount on the vehicle (NED/FRD, m); the next image comes from there."""
+        if external:
+            _unsupported('simSetCameraPose(external=True)', 'external cameras are spawned with the CARLA API')
+        a, cam, mount, _, _ = self._camera(vehicle_name, camera_name, 'simSetCameraPose')
+        p, o = pose.position, pose.orientation
+        new = list(mount)
+        if not p.containsNan():
+            new[0:3] = [p.x_val, p.y_val, p.z_val]
+        if not o.containsNan():
+            pitch, roll, yaw = to_eularian_angles(o)
+            new[3:6] = [math.degrees(roll), math.degrees(pitch), math.degrees(yaw)]
+        self._s.cameras.setdefault((a, cam), {})['pose'] = tuple(new)
+
+    def simSetCameraOrientation(self, camera_name, orientation, vehicle_name='', external=False):
+        log.warning('`simSetCameraOrientation` API has been upgraded to `simSetCameraPose`. Please update your code.')
+        self.simSetCameraPose(camera_name, Pose(Vector3r.nanVector3r(), orientation), vehicle_name, external)
+
+    def simSetCameraFov(self, camera_name, fov_degrees, vehicle_name='', external=False):
+        if external:
+            _unsupported('simSetCameraFov(external=True)', 'external cameras are spawned with the CARLA API')
+        if not 0 < float(fov_degrees) < 180:
+            raise lockstep.ClientError('simSetCameraFov: fov_degrees must be in (0, 180), got %r' % (fov_degrees,))
+        a, cam, _, _, _ = self._camera(vehicle_name, camera_name, 'simSetCameraFov')
+        self._s.cameras.setdefault((a, cam), {})['fov'] = float(fov_degrees)
+
+    # --- line of sight and the world ---
+    def _ray_clear(self, call, p1, p2):
+        """Whether the segment p1 -> p2 (world ENU) is free of the town: a distance sensor's
+        ray from p1 towards p2 (needs sensors)."""
+        d = [b - a for a, b in zip(p1, p2)]
+        length = math.sqrt(sum(x * x for x in d))
+        if length < 1e-6:
+            return True
+        yaw = math.atan2(d[1], d[0])
+        pitch = -math.asin(max(-1.0, min(1.0, d[2] / length)))
+        cy, sy, cp, sp = math.cos(yaw / 2), math.sin(yaw / 2), math.cos(pitch / 2), math.sin(pitch / 2)
+        q = (cy * cp, -sy * sp, cy * sp, sy * cp)
+        reach = min(length, 9999.0)
+        attrs = {'min_distance': '0', 'max_distance': repr(reach), 'noise_stddev': '0', 'role_name': 'airsim_los'}
+        key = ('los', tuple(round(v, 6) for v in p1 + p2))
+        frame = self._client.frame()
+        s = self._s.sensors.latest(call, key, 'sensor.other.distance', attrs, tuple(p1) + q, 0, newer_than=frame)
+        dist = s.fields()['distance']
+        self._s.sensors.drop(lambda k: k == key)
+        return not (0 <= dist < reach - 1e-3)
+
+    def simTestLineOfSightToPoint(self, point, vehicle_name=''):
+        a = self._s.actor(vehicle_name)
+        t = self._client.state(a)['transform']
+        return self._ray_clear('simTestLineOfSightToPoint', tuple(t[:3]),
+                               self._s.geo_to_enu(point.latitude, point.longitude, point.altitude))
+
+    def simTestLineOfSightBetweenPoints(self, point1, point2):
+        return self._ray_clear('simTestLineOfSightBetweenPoints',
+                               self._s.geo_to_enu(point1.latitude, point1.longitude, point1.altitude),
+                               self._s.geo_to_enu(point2.latitude, point2.longitude, point2.altitude))
+
+    def simGetWorldExtents(self):
+        """[min, max] GeoPoints of the map's bounds (ground to 200 m)."""
+        x0, y0, x1, y1 = self._client.map().bounds()
+        return [GeoPoint(*self._s.enu_to_geo(x0, y0, 0.0)), GeoPoint(*self._s.enu_to_geo(x1, y1, 200.0))]
+
+    def simRunConsoleCommand(self, command):
+        _unsupported('simRunConsoleCommand', 'there is no Unreal console')
+
+    def simGetMeshPositionVertexBuffers(self):
+        _unsupported('simGetMeshPositionVertexBuffers', "the town meshes are the services' (lockstep map meshes)")
+
+    # --- vehicle pose and collisions ---
+    def simGetCollisionInfo(self, vehicle_name=''):
+        self._s.actor(vehicle_name)
+        return self._collision(self._mc.state(vehicle_name))
+
+    def _collision(self, s):
+        has, normal, impact, pos, depth, obj_id, obj_name, frame = s['collision']
+        out = CollisionInfo()
+        out.has_collided = bool(has)
+        out.normal, out.impact_point, out.position = _v(normal), _v(impact), _v(pos)
+        out.penetration_depth = depth
+        out.object_id = int(obj_id) if obj_name else -1
+        out.object_name = obj_name
+        dt = self._client.world_info()['settings']['fixed_delta_seconds']
+        out.time_stamp = int(round(frame * dt * 1e9)) if frame else 0   # ns of simulation time, as AirSim
+        return out
+
+    def simSetVehiclePose(self, pose, ignore_collision, vehicle_name=''):
+        """Teleports; NaN components keep the current value, as AirSim; the quaternion is normalised."""
+        self._s.actor(vehicle_name)
+        cur_p, cur_q = self._mc.pose(vehicle_name)
+        p, o = pose.position, pose.orientation
+        pos = tuple(c if math.isnan(n) else n for n, c in zip((p.x_val, p.y_val, p.z_val), cur_p))
+        if o.containsNan():
+            q = cur_q
+        else:
+            n = o.get_length()
+            if n < 1e-9:
+                raise lockstep.ClientError('simSetVehiclePose: the orientation is a zero quaternion')
+            q = (o.w_val / n, o.x_val / n, o.y_val / n, o.z_val / n)
+        self._mc.set_pose(pos, q, vehicle_name)
+
+    def simGetVehiclePose(self, vehicle_name=''):
+        self._s.actor(vehicle_name)
+        p, q = self._mc.pose(vehicle_name)
+        return Pose(_v(p), _q(q))
+
+    def simSetTraceLine(self, color_rgba, thickness=1.0, vehicle_name=''):
+        """The trace's colour and thickness (kept; the trace is drawn by no viewport)."""
+        if len(color_rgba) != 4 or any(not 0 <= float(c) <= 1 for c in color_rgba):
+            raise lockstep.ClientError('simSetTraceLine: color_rgba is 4 values in [0, 1], got %r' % (color_rgba,))
+        a = self._s.actor(vehicle_name)
+        self._s.trace[a] = (tuple(float(c) for c in color_rgba), float(thickness))
+
+    # --- scene objects: the run's actors by name ---
+    def _objects(self):
+        """name -> actor id: drones by vehicle name, other actors by role_name or '<kind>_<id>'."""
+        out = {}
+        for a in self._client.actors():
+            role = a['attributes'].get('role_name', '')
+            if a['kind'] == 'drone':
+                out[role or 'Drone%d' % a['id']] = a['id']
+            elif a['kind'] != 'sensor':
+                out[role or '%s_%d' % (a['kind'], a['id'])] = a['id']
+                out.setdefault('%s_%d' % (a['kind'], a['id']), a['id'])
+        for name, actor in self._s.spawned_objects.items():
+            out[name] = actor
+        return out
+
+    def simListSceneObjects(self, name_regex='.*'):
+        rx = re.compile(name_regex)
+        return sorted(n for n in self._objects() if rx.fullmatch(n))
+
+    def _object_home(self):
+        sx, sy, sz = self._s.start()
+        return (sx, sy, sz)
+
+    def simGetObjectPose(self, object_name):
+        """World NED pose (from the player start) of an actor; a nan Pose when there is none, as AirSim."""
+        actor = self._objects().get(object_name)
+        st = self._client.state(actor) if actor is not None else None
+        if st is None:
+            return Pose.nanPose()
+        t = st['transform']
+        return Pose(_v(geo.enu_to_ned_pos(t[:3], self._object_home())), geo.enu_to_ned_quat(t[3:7]))
+
+    def simSetObjectPose(self, object_name, pose, teleport=True):
+        actor = self._objects().get(object_name)
+        if actor is None:
+            return False
+        p, o = pose.position, pose.orientation
+        enu = geo.ned_to_enu_pos((p.x_val, p.y_val, p.z_val), self._object_home())
+        q = geo.ned_to_enu_quat(o)
+        reply = self._client.submit({'type': 'set_transform', 'actor': actor, 'transform': tuple(enu) + tuple(q)}, False)
+        return bool(reply[0])
+
+    def simGetObjectScale(self, object_name):
+        if object_name not in self._objects():
+            return Vector3r.nanVector3r()
+        return Vector3r(1.0, 1.0, 1.0)
+
+    def simSetObjectScale(self, object_name, scale_vector):
+        _unsupported('simSetObjectScale', "an actor's size is its blueprint's")
+
+    def simLoadLevel(self, level_name):
+        """Loads the town named `level_name` (a new run), as carla's load_world."""
+        import carla
+        carla.Client().load_world(level_name)
+        return True
+
+    def simListAssets(self):
+        """The blueprints simSpawnObject can spawn ('static.prop.*' of the running services)."""
+        return sorted(d['id'] for d in self._client.blueprints(1.0) if d['id'].startswith('static.'))
+
+    def simSpawnObject(self, object_name, asset_name, pose, scale, physics_enabled=False, is_blueprint=False):
+        if asset_name not in self.simListAssets():
+            raise lockstep.ClientError("simSpawnObject: no asset '%s' (simListAssets: the static.prop.* blueprints)"
+                                       % asset_name)
+        if scale is not None and any(abs(v - 1.0) > 1e-9 for v in (scale.x_val, scale.y_val, scale.z_val)):
+            _unsupported('simSpawnObject(scale != 1)', "a prop's size is its blueprint's")
+        p = pose.position
+        enu = geo.ned_to_enu_pos((p.x_val, p.y_val, p.z_val), self._object_home())
+        name = object_name
+        objs = self._objects()
+        i = 1
+        while name in objs:
+            name = '%s_%d' % (object_name, i)
+            i += 1
+        actor = self._client.spawn(asset_name, tuple(enu) + tuple(geo.ned_to_enu_quat(pose.orientation)),
+                                   {'role_name': name})
+        self._s.spawned_objects[name] = actor
+        return name
+
+    def simDestroyObject(self, object_name):
+        actor = self._objects().get(object_name)
+        if actor is None:
+            return False
+        self._client.destroy(actor)
+        self._s.spawned_objects.pop(object_name, None)
+        return True
+
+    # --- segmentation and detections ---
+    def simSetSegmentationObjectID(self, mesh_name, object_id, is_name_regex=False):
+        if not 0 <= int(object_id) <= 255:
+            raise lockstep.ClientError('simSetSegmentationObjectID: object_id must be in 0..255, got %r' % (object_id,))
+        names = self._objects()
+        hit = [n for n in names if (re.fullmatch(mesh_name, n) if is_name_regex else n == mesh_name)]
+        for n in hit:
+            self._s.seg_ids[n] = int(object_id)
+        if hit:
+            _unsupported('simSetSegmentationObjectID', "the render service colours segmentation by its own "
+                         "instance ids (the id is not sent to it)")
+        return False
+
+    def simGetSegmentationObjectID(self, mesh_name):
+        if mesh_name in self._s.seg_ids:
+            return self._s.seg_ids[mesh_name]
+        actor = self._objects().get(mesh_name)
+        return -1 if actor is None else actor % 256
+
+    def _detection(self, camera_name, image_type, vehicle_name):
+        a, cam, _, _, _ = self._camera(vehicle_name, camera_name, 'simGetDetections')
+        return self._s.detection.setdefault((a, cam, int(image_type)), {'filters': [], 'radius_cm': 20000.0})
+
+    def simAddDetectionFilterMeshName(self, camera_name, image_type, mesh_name, vehicle_name='', external=False):
+        self._detection(camera_name, image_type, vehicle_name)['filters'].append(mesh_name)
+
+    def simSetDetectionFilterRadius(self, camera_name, image_type, radius_cm, vehicle_name='', external=False):
+        self._detection(camera_name, image_type, vehicle_name)['radius_cm'] = float(radius_cm)
+
+    def simClearDetectionMeshNames(self, camera_name, image_type, vehicle_name='', external=False):
+        self._detection(camera_name, image_type, vehicle_name)['filters'] = []
+
+    def simGetDetections(self, camera_name, image_type, vehicle_name='', external=False):
+        """The actors matching the camera's filters (AirSim's wildcards) within its radius
+        and its view: box2D from their 3D boxes projected with the camera's pinhole."""
+        import fnmatch
+        d = self._detection(camera_name, image_type, vehicle_name)
+        if not d['filters']:
+            return []
+        a, cam, mount, fov_over, cs = self._camera(vehicle_name, camera_name, 'simGetDetections')
+        w, h, fov = self._capture(cs, int(image_type), fov_over)
+        cp, cq = self._camera_world(a, vehicle_name, mount)
+        home = self._client.drone_state(a)['home'][:3]
+        f = w / 2.0 / math.tan(math.radians(fov) / 2)
+        out = []
+        for name, actor in sorted(self._objects().items()):
+            if actor == a or not any(fnmatch.fnmatch(name, flt) for flt in d['filters']):
+                continue
+            st = self._client.state(actor)
+            if st is None:
+                continue
+            t, ext = st['transform'], st['half_extents']
+            rel = geo.enu_to_ned_pos(t[:3], home)
+            dist = Vector3r(*rel) - cp
+            if dist.get_length() * 100 > d['radius_cm']:
+                continue
+            corners = []
+            for sx in (-1, 1):
+                for sy in (-1, 1):
+                    for sz in (-1, 1):
+                        corners.append(_v(geo.enu_to_ned_pos((t[0] + sx * ext[0], t[1] + sy * ext[1],
+                                                              t[2] + sz * ext[2]), home)))
+            px = []
+            inv = cq.inverse()
+            for c in corners:
+                v = _rotate_vector(inv, c - cp)
+                if v.x_val > 0.05:
+                    px.append((w / 2 + f * v.y_val / v.x_val, h / 2 + f * v.z_val / v.x_val))
+            if not px:
+                continue
+            xs = [min(max(p[0], 0), w - 1) for p in px]
+            ys = [min(max(p[1], 0), h - 1) for p in px]
+            if max(xs) <= min(xs) or max(ys) <= min(ys):
+                continue
+            info = DetectionInfo()
+            info.name = name
+            info.geo_point = GeoPoint(*self._s.enu_to_geo(*t[:3]))
+            info.box2D = Box2D()
+            info.box2D.min, info.box2D.max = Vector2r(min(xs), min(ys)), Vector2r(max(xs), max(ys))
+            info.box3D = Box3D()
+            rel_c = _rotate_vector(inv, _v(rel) - cp)
+            info.box3D.min = rel_c - Vector3r(*ext)
+            info.box3D.max = rel_c + Vector3r(*ext)
+            info.relative_pose = Pose(rel_c, inv * geo.enu_to_ned_quat(t[3:7]))
+            out.append(info)
+        return out
+
+    def simPrintLogMessage(self, message, message_param='', severity=0):
+        print('%s %s' % (message, message_param))
+
+    # --- kinematics and environment ---
+    def simGetGroundTruthKinematics(self, vehicle_name=''):
+        self._s.actor(vehicle_name)
+        return _kinematics(self._mc.state(vehicle_name))
+
+    def simSetKinematics(self, state, ignore_collision, vehicle_name=''):
+        """Pose, linear velocity (world NED) and angular velocity (body FRD) at once;
+        accelerations are ignored (air_sim derives them from the next step)."""
+        self._s.actor(vehicle_name)
+        o = state.orientation
+
+        def t(v):
+            return (v.x_val, v.y_val, v.z_val)
+        self._mc.set_kinematics(t(state.position), (o.w_val, o.x_val, o.y_val, o.z_val), t(state.linear_velocity),
+                                t(state.angular_velocity), vehicle_name)
+
+    def simGetGroundTruthEnvironment(self, vehicle_name=''):
+        """The standard atmosphere at the vehicle's altitude (AirSim's EnvironmentState)."""
+        a = self._s.actor(vehicle_name)
+        s = self._mc.state(vehicle_name)
+        t = self._client.state(a)['transform']
+        e = EnvironmentState()
+        e.position = _v(s['position'])
+        e.geo_point = GeoPoint(*self._s.enu_to_geo(*t[:3]))
+        alt = e.geo_point.altitude
+        temp = 288.15 - 0.0065 * alt
+        e.temperature = temp
+        e.air_pressure = 101325.0 * (temp / 288.15) ** 5.2558797
+        e.air_density = e.air_pressure / (287.05287 * temp)
+        e.gravity = Vector3r(0.0, 0.0, 9.80665)
+        return e
+
+    def simCreateVoxelGrid(self, position, x, y, z, res, of):
+        _unsupported('simCreateVoxelGrid', 'no occupancy query of the town over the wire')
+
+    # --- sensors: settings.json's, else AirSim's defaults, spawned on first use ---
+    def _sensor_setting(self, vehicle_name, kind, name, call):
+        v = self._s.vehicle_setting(vehicle_name)
+        declared = [s for s in (v.sensors.values() if v else []) if s.kind == kind and s.enabled]
+        if name:
+            for s in declared:
+                if s.name == name:
+                    return s
+            if declared or (v and v.sensors):
+                raise lockstep.ClientError("%s: vehicle '%s' has no %s named '%s' (settings.json: %s)" % (
+                    call, vehicle_name or 'default', kind, name, ', '.join(s.name for s in declared) or 'none'))
+        return declared[0] if declared else None
+
+    def _sensor(self, call, vehicle_name, kind, name, blueprint, attrs=None, newer=False):
+        a = self._s.actor(vehicle_name)
+        st = self._sensor_setting(vehicle_name, kind, name, call)
+        mount = (0.0,) * 6
+        if st is not None:
+            mount = tuple(getattr(st, k) or 0.0 for k in ('x', 'y', 'z', 'roll', 'pitch', 'yaw'))
+        elif kind == 'Lidar':
+            mount = (0.0, 0.0, -1.0, 0.0, 0.0, 0.0)   # AirSim's default LiDAR: 1 m above the body
+        a_attrs = dict(attrs or {})
+        a_attrs.setdefault('role_name', name or kind.lower())
+        frame = self._client.frame() if newer else None
+        s = self._s.sensors.latest(call, (kind, a, st.name if st else ''), blueprint, a_attrs,
+                                   geo.frd_mount_to_flu(*mount), a, newer_than=frame)
+        return s, st, mount, a
+
+    def getImuData(self, imu_name='', vehicle_name=''):
+        s, _, _, _ = self._sensor('getImuData', vehicle_name, 'Imu', imu_name, 'sensor.other.imu')
+        f = s.fields()
+        out = ImuData()
+        out.time_stamp = int(round(s.sim_time * 1e9))
+        a, g = f['accelerometer'], f['gyroscope']
+        out.linear_acceleration = Vector3r(a[0], -a[1], -a[2])   # FLU -> FRD
+        out.angular_velocity = Vector3r(g[0], -g[1], -g[2])
+        out.orientation = geo.enu_to_ned_quat(tuple(f['orientation']))
+        return out
+
+    def getGpsData(self, gps_name='', vehicle_name=''):
+        s, _, _, a = self._sensor('getGpsData', vehicle_name, 'Gps', gps_name, 'sensor.other.gnss')
+        f = s.fields()
+        out = GpsData()
+        out.time_stamp = int(round(s.sim_time * 1e9))
+        out.gnss.geo_point = GeoPoint(*self._s.geo_shift((f['latitude'], f['longitude'], f['altitude'])))
+        out.gnss.eph, out.gnss.epv = f['eph'], f['epv']
+        out.gnss.fix_type = 3 if f['fix'] else 0
+        st = self._client.state(a)
+        if st:
+            out.gnss.velocity = _v(geo.enu_to_ned_pos(st['velocity'], (0, 0, 0)))
+        out.gnss.time_utc = int(round(s.sim_time * 1e6))
+        out.is_valid = True
+        return out
+
+    def getBarometerData(self, barometer_name='', vehicle_name=''):
+        s, _, _, _ = self._sensor('getBarometerData', vehicle_name, 'Barometer', barometer_name,
+                                  'sensor.other.barometer')
+        f = s.fields()
+        out = BarometerData()
+        out.time_stamp = int(round(s.sim_time * 1e9))
+        out.altitude, out.pressure, out.qnh = f['altitude'], f['pressure'], f['qnh']
+        return out
+
+    def getMagnetometerData(self, magnetometer_name='', vehicle_name=''):
+        s, _, _, _ = self._sensor('getMagnetometerData', vehicle_name, 'Magnetometer', magnetometer_name,
+                                  'sensor.other.magnetometer')
+        m = s.fields()['magnetic_field']
+        out = MagnetometerData()
+        out.time_stamp = int(round(s.sim_time * 1e9))
+        out.magnetic_field_body = Vector3r(m[0], -m[1], -m[2])
+        return out
+
+    def getDistanceSensorData(self, distance_sensor_name='', vehicle_name=''):
+        st = self._sensor_setting(vehicle_name, 'Distance', distance_sensor_name, 'getDistanceSensorData')
+        attrs = {}
+        if st is not None:
+            attrs = {'min_distance': repr(st.params['min_distance']), 'max_distance': repr(st.params['max_distance'])}
+        s, st, mount, _ = self._sensor('getDistanceSensorData', vehicle_name, 'Distance', distance_sensor_name,
+                                       'sensor.other.distance', attrs)
+        f = s.fields()
+        out = DistanceSensorData()
+        out.time_stamp = int(round(s.sim_time * 1e9))
+        out.distance, out.min_distance, out.max_distance = f['distance'], f['min_distance'], f['max_distance']
+        out.relative_pose = Pose(Vector3r(*mount[:3]), geo.frd_euler_deg_to_quat(*mount[3:]))
+        return out
+
+    def getLidarData(self, lidar_name='', vehicle_name=''):
+        """AirSim's LidarData: the points of the last scan in the settings' DataFrame
+        (VehicleInertialFrame: the vehicle's NED frame from its home, AirSim's default;
+        SensorLocalFrame: the sensor's FRD frame) and the LiDAR's pose in the vehicle's NED frame."""
+        st = self._sensor_setting(vehicle_name, 'Lidar', lidar_name, 'getLidarData')
+        p = dict(st.params) if st is not None else {
+            'channels': 16, 'range': 100.0, 'rotations_per_second': 10.0, 'points_per_second': 100000,
+            'upper': -15.0, 'lower': -45.0, 'h_start': 0.0, 'h_end': 359.0, 'data_frame': 'VehicleInertialFrame'}
+        width = (p['h_end'] - p['h_start']) % 360.0
+        if width == 0:
+            width = 360.0   # AirSim: start == end is the whole circle
+        center = p['h_start'] + width / 2.0 if width < 360.0 else 0.0
+        attrs = {'channels': str(p['channels']), 'range': repr(p['range']),
+                 'points_per_second': str(p['points_per_second']), 'rotation_frequency': repr(p['rotations_per_second']),
+                 'upper_fov': repr(p['upper']), 'lower_fov': repr(p['lower']), 'horizontal_fov': repr(width),
+                 'dropoff_general_rate': '0', 'noise_stddev': '0', 'atmosphere_attenuation_rate': '0'}
+        a = self._s.actor(vehicle_name)
+        mount = (0.0, 0.0, -1.0, 0.0, 0.0, 0.0)
+        if st is not None:
+            mount = tuple(getattr(st, k) or 0.0 for k in ('x', 'y', 'z', 'roll', 'pitch', 'yaw'))
+        # The scan's centre is the sensor's forward axis: turn the mount by it, turn the points back.
+        spawn_mount = mount[:5] + (mount[5] + center,)
+        s = self._s.sensors.latest('getLidarData', ('Lidar', a, st.name if st else ''), 'sensor.lidar.ray_cast',
+                                   dict(attrs, role_name=lidar_name or 'lidar'), geo.frd_mount_to_flu(*spawn_mount), a)
+        pts = np.array(s.array(), dtype=np.float64)[:, :3]
+        pts[:, 1] *= -1   # FLU -> FRD
+        pts[:, 2] *= -1
+        if center:
+            c, sn = math.cos(math.radians(center)), math.sin(math.radians(center))
+            x, y = pts[:, 0].copy(), pts[:, 1].copy()
+            pts[:, 0], pts[:, 1] = c * x - sn * y, sn * x + c * y
+        vp, vq = self._mc.pose(vehicle_name)
+        lp, lq = geo.compose(_v(vp), _q(vq), Vector3r(*mount[:3]), geo.frd_euler_deg_to_quat(*mount[3:]))
+        out = LidarData()
+        out.time_stamp = int(round(s.sim_time * 1e9))
+        out.pose = Pose(lp, lq)
+        if p['data_frame'] == 'VehicleInertialFrame' and len(pts):
+            n = lq.get_length()
+            w, x, y, z = lq.w_val / n, lq.x_val / n, lq.y_val / n, lq.z_val / n
+            r = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                          [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                          [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+            pts = pts @ r.T + np.array([lp.x_val, lp.y_val, lp.z_val])
+        out.point_cloud = pts.astype(np.float32).reshape(-1).tolist()
+        out.segmentation = [0] * len(pts)
+        return out
+
+    def simGetLidarSegmentation(self, lidar_name='', vehicle_name=''):
+        log.warning('simGetLidarSegmentation API is deprecated, use getLidarData() API instead')
+        return self.getLidarData(lidar_name, vehicle_name).segmentation
+
+    # --- plotting (no viewport here: the markers are kept, not drawn) ---
+    def _plot(self, call, kind, points, is_persistent, **kw):
+        for p in points:
+            if not isinstance(p, (Vector3r, Pose)):
+                raise TypeError('%s: points are airsim.Vector3r (or Pose), got %s' % (call, type(p).__name__))
+        if is_persistent:
+            self._s.markers.append((kind, list(points), kw))
+
+    def simFlushPersistentMarkers(self):
+        self._s.markers.clear()
+
+    def simPlotPoints(self, points, color_rgba=[1.0, 0.0, 0.0, 1.0], size=10.0, duration=-1.0, is_persistent=False):
+        self._plot('simPlotPoints', 'points', points, is_persistent, color=color_rgba, size=size)
+
+    def simPlotLineStrip(self, points, color_rgba=[1.0, 0.0, 0.0, 1.0], thickness=5.0, duration=-1.0,
+                         is_persistent=False):
+        self._plot('simPlotLineStrip', 'line_strip', points, is_persistent, color=color_rgba, thickness=thickness)
+
+    def simPlotLineList(self, points, color_rgba=[1.0, 0.0, 0.0, 1.0], thickness=5.0, duration=-1.0,
+                        is_persistent=False):
+        if len(points) % 2:
+            raise lockstep.ClientError('simPlotLineList: an even number of points, got %d' % len(points))
+        self._plot('simPlotLineList', 'line_list', points, is_persistent, color=color_rgba, thickness=thickness)
+
+    def simPlotArrows(self, points_start, points_end, color_rgba=[1.0, 0.0, 0.0, 1.0], thickness=5.0, arrow_size=2.0,
+                      duration=-1.0, is_persistent=False):
+        if len(points_start) != len(points_end):
+            raise lockstep.ClientError('simPlotArrows: points_start and points_end differ in length')
+        self._plot('simPlotArrows', 'arrows', list(points_start) + list(points_end), is_persistent,
+                   color=color_rgba, thickness=thickness)
+
+    def simPlotStrings(self, strings, positions, scale=5, color_rgba=[1.0, 0.0, 0.0, 1.0], duration=-1.0):
+        if len(strings) != len(positions):
+            raise lockstep.ClientError('simPlotStrings: strings and positions differ in length')
+        self._plot('simPlotStrings', 'strings', positions, False)
+
+    def simPlotTransforms(self, poses, scale=5.0, thickness=5.0, duration=-1.0, is_persistent=False):
+        self._plot('simPlotTransforms', 'transforms', poses, is_persistent)
+
+    def simPlotTransformsWithNames(self, poses, names, tf_scale=5.0, tf_thickness=5.0, text_scale=10.0,
+                                   text_color_rgba=[1.0, 0.0, 0.0, 1.0], duration=-1.0):
+        if len(poses) != len(names):
+            raise lockstep.ClientError('simPlotTransformsWithNames: poses and names differ in length')
+        self._plot('simPlotTransformsWithNames', 'transforms', poses, False)
+
+    # --- tasks, recording, wind, vehicles, settings ---
     def cancelLastTask(self, vehicle_name=''):
+        self._s.actor(vehicle_name)
         self._mc.cancel(vehicle_name)
 
-    def moveToPositionAsync(self, x, y, z, velocity, timeout_sec=3e+38, drivetrain=DrivetrainType.MaxDegreeOfFreedom,
-                            yaw_mode=YawMode(), lookahead=-1, adaptive_lookahead=1, vehicle_name=''):
-        return _Future(self._mc.move_to_position(x, y, z, velocity, timeout_sec, drivetrain, yaw_mode.is_rate,
-                                                 yaw_mode.yaw_or_rate, lookahead, vehicle_name))
+    def startRecording(self):
+        _unsupported('startRecording', "recording is the recorder service of the launch config (every frame's "
+                     "world state to CSV)")
 
-    def moveToZAsync(self, z, velocity, timeout_sec=3e+38, yaw_mode=YawMode(), lookahead=-1, adaptive_lookahead=1,
-                     vehicle_name=''):
-        return _Future(self._mc.move_to_z(z, velocity, timeout_sec, yaw_mode.is_rate, yaw_mode.yaw_or_rate, lookahead,
-                                          vehicle_name))
+    def stopRecording(self):
+        _unsupported('stopRecording', 'recording is the recorder service of the launch config')
+
+    def isRecording(self):
+        return any(m[1] == 'recorder' and m[2] for m in (self._client.run_status() or {}).get('members', []))
+
+    def simSetWind(self, wind):
+        """One wind (m/s, world NED) for every drone, from the next tick."""
+        self._s.ensure_vehicles()
+        self._mc.set_wind((wind.x_val, wind.y_val, wind.z_val))
+
+    def simAddVehicle(self, vehicle_name, vehicle_type, pose, pawn_path=''):
+        """A multirotor at `pose` (world NED from the player start)."""
+        if vehicle_type.lower() not in ('simpleflight', 'px4multirotor', 'arducopter', ''):
+            _unsupported('simAddVehicle(%r)' % vehicle_type, 'vehicles added at run time are multirotors')
+        s = self._s
+        with s.lock:
+            s.ensure_vehicles()
+            if vehicle_name in self._mc.list_vehicles():
+                log.warning("airsim: vehicle '%s' exists already", vehicle_name)
+                return False
+            p = pose.position
+            pitch, roll, yaw = to_eularian_angles(pose.orientation)
+            a = s.spawn_vehicle(vehicle_name, (p.x_val, p.y_val, p.z_val),
+                                (math.degrees(roll), math.degrees(pitch), math.degrees(yaw)))
+            s.wait_at_rest([a])
+        return True
+
+    def listVehicles(self):
+        self._s.ensure_vehicles()
+        return self._mc.list_vehicles()
+
+    def getSettingsString(self):
+        return self._s.load_settings().text
+
+
+# --------------------------------------------------------------------------- MultirotorClient
+class MultirotorClient(VehicleClient):
+    """AirSim's MultirotorClient over air_sim."""
+
+    def _cmd(self, call, vehicle_name, fn, *args):
+        a = self._s.actor(vehicle_name)
+        self._motors_on(a, vehicle_name)
+        return _Future(self._s, fn(*args), vehicle_name, call)
+
+    def _motors_on(self, actor, vehicle_name):
+        """simple_flight drives its motors whatever the arm state (arming only changes its
+        state machine): a command to a disarmed vehicle under API control arms it, where
+        air_sim would refuse it."""
+        d = self._client.drone_state(actor)
+        if d is not None and not d['armed'] and self._mc.is_api_control_enabled(vehicle_name):
+            self._mc.arm_disarm(True, vehicle_name)
+
+    @staticmethod
+    def _drive(drivetrain, yaw_mode):
+        """AirSim's adjustYaw: ForwardOnly with a yaw rate is no adjustment at all (MaxDegreeOfFreedom)."""
+        if drivetrain == DrivetrainType.ForwardOnly and yaw_mode.is_rate:
+            return DrivetrainType.MaxDegreeOfFreedom
+        return drivetrain
+
+    def takeoffAsync(self, timeout_sec=20, vehicle_name=''):
+        return self._cmd('takeoffAsync', vehicle_name, self._mc.takeoff, timeout_sec, vehicle_name)
+
+    def landAsync(self, timeout_sec=60, vehicle_name=''):
+        return self._cmd('landAsync', vehicle_name, self._mc.land, timeout_sec, vehicle_name)
+
+    def goHomeAsync(self, timeout_sec=3e+38, vehicle_name=''):
+        """AirSim's goHome: moveToPosition(0, 0, 0) at 0.5 m/s."""
+        return self._cmd('goHomeAsync', vehicle_name, self._mc.move_to_position, 0.0, 0.0, 0.0, 0.5, timeout_sec,
+                         DrivetrainType.MaxDegreeOfFreedom, True, 0.0, -1, vehicle_name)
+
+    def moveByVelocityBodyFrameAsync(self, vx, vy, vz, duration, drivetrain=DrivetrainType.MaxDegreeOfFreedom,
+                                     yaw_mode=YawMode(), vehicle_name=''):
+        if not _dur(duration):
+            return _DoneFuture()
+        return self._cmd('moveByVelocityBodyFrameAsync', vehicle_name, self._mc.move_by_velocity, vx, vy, vz, duration,
+                         self._drive(drivetrain, yaw_mode), yaw_mode.is_rate, yaw_mode.yaw_or_rate, True, vehicle_name)
+
+    def moveByVelocityZBodyFrameAsync(self, vx, vy, z, duration, drivetrain=DrivetrainType.MaxDegreeOfFreedom,
+                                      yaw_mode=YawMode(), vehicle_name=''):
+        """vx, vy in the body frame's heading at the call (AirSim turns them by the yaw only)."""
+        if not _dur(duration):
+            return _DoneFuture()
+        self._s.actor(vehicle_name)
+        _, q = self._mc.pose(vehicle_name)
+        yaw = to_eularian_angles(_q(q))[2]
+        c, s = math.cos(yaw), math.sin(yaw)
+        return self.moveByVelocityZAsync(c * vx - s * vy, s * vx + c * vy, z, duration, drivetrain, yaw_mode, vehicle_name)
+
+    def moveByAngleZAsync(self, pitch, roll, z, yaw, duration, vehicle_name=''):
+        log.warning('moveByAngleZAsync API is deprecated, use moveByRollPitchYawZAsync() API instead')
+        return self.moveByRollPitchYawZAsync(roll, pitch, yaw, z, duration, vehicle_name)
+
+    def moveByAngleThrottleAsync(self, pitch, roll, throttle, yaw_rate, duration, vehicle_name=''):
+        log.warning('moveByAngleThrottleAsync API is deprecated, use moveByRollPitchYawrateThrottleAsync() API instead')
+        return self.moveByRollPitchYawrateThrottleAsync(roll, pitch, yaw_rate, throttle, duration, vehicle_name)
+
+    def moveByVelocityAsync(self, vx, vy, vz, duration, drivetrain=DrivetrainType.MaxDegreeOfFreedom, yaw_mode=YawMode(),
+                            vehicle_name=''):
+        if not _dur(duration):
+            return _DoneFuture()
+        return self._cmd('moveByVelocityAsync', vehicle_name, self._mc.move_by_velocity, vx, vy, vz, duration,
+                         self._drive(drivetrain, yaw_mode), yaw_mode.is_rate, yaw_mode.yaw_or_rate, False, vehicle_name)
+
+    def moveByVelocityZAsync(self, vx, vy, z, duration, drivetrain=DrivetrainType.MaxDegreeOfFreedom, yaw_mode=YawMode(),
+                             vehicle_name=''):
+        if not _dur(duration):
+            return _DoneFuture()
+        return self._cmd('moveByVelocityZAsync', vehicle_name, self._mc.move_by_velocity_z, vx, vy, z, duration,
+                         self._drive(drivetrain, yaw_mode), yaw_mode.is_rate, yaw_mode.yaw_or_rate, vehicle_name)
 
     def moveOnPathAsync(self, path, velocity, timeout_sec=3e+38, drivetrain=DrivetrainType.MaxDegreeOfFreedom,
                         yaw_mode=YawMode(), lookahead=-1, adaptive_lookahead=1, vehicle_name=''):
         pts = [(p.x_val, p.y_val, p.z_val) for p in path]
-        return _Future(self._mc.move_on_path(pts, velocity, timeout_sec, drivetrain, yaw_mode.is_rate,
-                                             yaw_mode.yaw_or_rate, lookahead, vehicle_name))
+        return self._cmd('moveOnPathAsync', vehicle_name, self._mc.move_on_path, pts, velocity, timeout_sec,
+                         self._drive(drivetrain, yaw_mode), yaw_mode.is_rate, yaw_mode.yaw_or_rate, lookahead,
+                         vehicle_name)
 
-    def moveByVelocityAsync(self, vx, vy, vz, duration, drivetrain=DrivetrainType.MaxDegreeOfFreedom, yaw_mode=YawMode(),
-                            vehicle_name=''):
-        return _Future(self._mc.move_by_velocity(vx, vy, vz, duration, drivetrain, yaw_mode.is_rate,
-                                                 yaw_mode.yaw_or_rate, False, vehicle_name))
+    def moveToPositionAsync(self, x, y, z, velocity, timeout_sec=3e+38, drivetrain=DrivetrainType.MaxDegreeOfFreedom,
+                            yaw_mode=YawMode(), lookahead=-1, adaptive_lookahead=1, vehicle_name=''):
+        return self._cmd('moveToPositionAsync', vehicle_name, self._mc.move_to_position, x, y, z, velocity, timeout_sec,
+                         self._drive(drivetrain, yaw_mode), yaw_mode.is_rate, yaw_mode.yaw_or_rate, lookahead,
+                         vehicle_name)
 
-    def moveByVelocityBodyFrameAsync(self, vx, vy, vz, duration, drivetrain=DrivetrainType.MaxDegreeOfFreedom,
-                                     yaw_mode=YawMode(), vehicle_name=''):
-        return _Future(self._mc.move_by_velocity(vx, vy, vz, duration, drivetrain, yaw_mode.is_rate,
-                                                 yaw_mode.yaw_or_rate, True, vehicle_name))
+    def moveToGPSAsync(self, latitude, longitude, altitude, velocity, timeout_sec=3e+38,
+                       drivetrain=DrivetrainType.MaxDegreeOfFreedom, yaw_mode=YawMode(), lookahead=-1,
+                       adaptive_lookahead=1, vehicle_name=''):
+        lat, lon, alt = self._s.geo_shift((latitude, longitude, altitude), inverse=True)
+        return self._cmd('moveToGPSAsync', vehicle_name, self._mc.move_to_gps, lat, lon, alt, velocity, timeout_sec,
+                         self._drive(drivetrain, yaw_mode), yaw_mode.is_rate, yaw_mode.yaw_or_rate, lookahead,
+                         adaptive_lookahead, vehicle_name)
 
-    def moveByVelocityZAsync(self, vx, vy, z, duration, drivetrain=DrivetrainType.MaxDegreeOfFreedom, yaw_mode=YawMode(),
-                             vehicle_name=''):
-        return _Future(self._mc.move_by_velocity_z(vx, vy, z, duration, drivetrain, yaw_mode.is_rate,
-                                                   yaw_mode.yaw_or_rate, vehicle_name))
+    def moveToZAsync(self, z, velocity, timeout_sec=3e+38, yaw_mode=YawMode(), lookahead=-1, adaptive_lookahead=1,
+                     vehicle_name=''):
+        return self._cmd('moveToZAsync', vehicle_name, self._mc.move_to_z, z, velocity, timeout_sec, yaw_mode.is_rate,
+                         yaw_mode.yaw_or_rate, lookahead, vehicle_name)
+
+    def moveByManualAsync(self, vx_max, vy_max, z_min, duration, drivetrain=DrivetrainType.MaxDegreeOfFreedom,
+                          yaw_mode=YawMode(), vehicle_name=''):
+        """AirSim's manual mode: for `duration`, the RC input (moveByRC) drives the vehicle,
+        its sticks scaled by vx_max, vy_max and z_min as AirSim's moveByManual does."""
+        if not _dur(duration):
+            return _DoneFuture()
+        a = self._s.actor(vehicle_name)
+        if not self._mc.is_api_control_enabled(vehicle_name):
+            raise lockstep.ClientError("vehicle '%s' is not under API control: call enableApiControl(True) first"
+                                       % (vehicle_name or 'default'))
+        end = self._s.sim_time() + min(float(duration), 1e5)
+        self._s.manual[a] = (vx_max, vy_max, z_min, end, drivetrain, yaw_mode)
+        rc = self._s.rc.get(a)
+        if rc is not None:
+            self._apply_rc(a, rc, vehicle_name)
+        return _TimedFuture(self._s, end)
+
+    def moveByRC(self, rcdata=RCData(), vehicle_name=''):
+        """The RC input: in manual mode (moveByManualAsync) it sets the velocity and altitude
+        goal as AirSim's moveByManual turns sticks into them; otherwise it is kept for it."""
+        a = self._s.actor(vehicle_name)
+        self._s.rc[a] = rcdata
+        self._apply_rc(a, rcdata, vehicle_name)
+
+    def _apply_rc(self, a, rc, vehicle_name):
+        m = self._s.manual.get(a)
+        if m is None or not rc.is_valid:
+            return
+        vx_max, vy_max, z_min, end, drivetrain, yaw_mode = m
+        left = min(end - self._s.sim_time(), 1e5)
+        if left <= 0:
+            del self._s.manual[a]
+            return
+        self._motors_on(a, vehicle_name)
+        k = 10000.0   # AirSim's kMaxRCValue
+        vx, vy = rc.pitch * vy_max / k, rc.roll * vx_max / k
+        _, q = self._mc.pose(vehicle_name)
+        yaw = to_eularian_angles(_q(q))[2]
+        c, s = math.cos(yaw), math.sin(yaw)
+        z = (rc.throttle / k) * z_min + self._mc.state(vehicle_name)['position'][2]
+        ym = YawMode(yaw_mode.is_rate, yaw_mode.yaw_or_rate + rc.yaw * 100.0 / k)
+        speed = math.hypot(vx, vy)
+        if speed > 100.0:
+            vx, vy = vx * 100.0 / speed, vy * 100.0 / speed
+        self._mc.move_by_velocity_z(c * vx - s * vy, s * vx + c * vy, z, left, self._drive(drivetrain, ym), ym.is_rate,
+                                    ym.yaw_or_rate, vehicle_name)
 
     def rotateToYawAsync(self, yaw, timeout_sec=3e+38, margin=5, vehicle_name=''):
-        return _Future(self._mc.rotate_to_yaw(yaw, timeout_sec, margin, vehicle_name))
+        return self._cmd('rotateToYawAsync', vehicle_name, self._mc.rotate_to_yaw, yaw, timeout_sec, margin, vehicle_name)
 
     def rotateByYawRateAsync(self, yaw_rate, duration, vehicle_name=''):
-        return _Future(self._mc.rotate_by_yaw_rate(yaw_rate, duration, vehicle_name))
+        if not _dur(duration):
+            return _DoneFuture()
+        return self._cmd('rotateByYawRateAsync', vehicle_name, self._mc.rotate_by_yaw_rate, yaw_rate, duration,
+                         vehicle_name)
 
-    def moveByRollPitchYawThrottleAsync(self, roll, pitch, yaw, throttle, duration, vehicle_name=''):
-        return _Future(self._mc.move_by_rpy_throttle(roll, pitch, yaw, throttle, duration, vehicle_name))
-
-    def moveByRollPitchYawZAsync(self, roll, pitch, yaw, z, duration, vehicle_name=''):
-        return _Future(self._mc.move_by_rpy_z(roll, pitch, yaw, z, duration, vehicle_name))
-
-    def moveByAngleRatesThrottleAsync(self, roll_rate, pitch_rate, yaw_rate, throttle, duration, vehicle_name=''):
-        return _Future(self._mc.move_by_angle_rates_throttle(roll_rate, pitch_rate, yaw_rate, throttle, duration,
-                                                             vehicle_name))
+    def hoverAsync(self, vehicle_name=''):
+        return self._cmd('hoverAsync', vehicle_name, self._mc.hover, vehicle_name)
 
     def moveByMotorPWMsAsync(self, front_right_pwm, rear_left_pwm, front_left_pwm, rear_right_pwm, duration,
                              vehicle_name=''):
-        return _Future(self._mc.move_by_motor_pwms([front_right_pwm, rear_left_pwm, front_left_pwm, rear_right_pwm],
-                                                   duration, vehicle_name))
+        if not _dur(duration):
+            return _DoneFuture()
+        return self._cmd('moveByMotorPWMsAsync', vehicle_name, self._mc.move_by_motor_pwms,
+                         [front_right_pwm, rear_left_pwm, front_left_pwm, rear_right_pwm], duration, vehicle_name)
 
-    def trackTargetAsync(self, position, velocity, max_speed=0.0, duration=1.0, vehicle_name=''):
-        """Lockstep extension: follow a moving target (NED position m, velocity m/s, from this drone's home)."""
-        return _Future(self._mc.track_target(tuple(position), tuple(velocity), max_speed, duration, vehicle_name))
+    def moveByRollPitchYawZAsync(self, roll, pitch, yaw, z, duration, vehicle_name=''):
+        if not _dur(duration):
+            return _DoneFuture()
+        return self._cmd('moveByRollPitchYawZAsync', vehicle_name, self._mc.move_by_rpy_z, roll, pitch, yaw, z, duration,
+                         vehicle_name)
 
-    def moveByManualAsync(self, *args, **kwargs):
-        _unsupported('moveByManualAsync', 'there is no RC input on the wire')
-
-    def moveByRC(self, *args, **kwargs):
-        _unsupported('moveByRC', 'there is no RC input on the wire')
+    def moveByRollPitchYawThrottleAsync(self, roll, pitch, yaw, throttle, duration, vehicle_name=''):
+        if not _dur(duration):
+            return _DoneFuture()
+        return self._cmd('moveByRollPitchYawThrottleAsync', vehicle_name, self._mc.move_by_rpy_throttle, roll, pitch,
+                         yaw, throttle, duration, vehicle_name)
 
     def moveByRollPitchYawrateThrottleAsync(self, roll, pitch, yaw_rate, throttle, duration, vehicle_name=''):
-        return _Future(self._mc.move_by_rp_yawrate_throttle(roll, pitch, yaw_rate, throttle, duration, vehicle_name))
+        if not _dur(duration):
+            return _DoneFuture()
+        return self._cmd('moveByRollPitchYawrateThrottleAsync', vehicle_name, self._mc.move_by_rp_yawrate_throttle, roll,
+                         pitch, yaw_rate, throttle, duration, vehicle_name)
 
     def moveByRollPitchYawrateZAsync(self, roll, pitch, yaw_rate, z, duration, vehicle_name=''):
-        return _Future(self._mc.move_by_rp_yawrate_z(roll, pitch, yaw_rate, z, duration, vehicle_name))
+        if not _dur(duration):
+            return _DoneFuture()
+        return self._cmd('moveByRollPitchYawrateZAsync', vehicle_name, self._mc.move_by_rp_yawrate_z, roll, pitch,
+                         yaw_rate, z, duration, vehicle_name)
 
     def moveByAngleRatesZAsync(self, roll_rate, pitch_rate, yaw_rate, z, duration, vehicle_name=''):
-        return _Future(self._mc.move_by_angle_rates_z(roll_rate, pitch_rate, yaw_rate, z, duration, vehicle_name))
+        if not _dur(duration):
+            return _DoneFuture()
+        return self._cmd('moveByAngleRatesZAsync', vehicle_name, self._mc.move_by_angle_rates_z, roll_rate, pitch_rate,
+                         yaw_rate, z, duration, vehicle_name)
 
-    def moveToGPSAsync(self, latitude, longitude, altitude, velocity, timeout_sec=3e+38,
-                       drivetrain=DrivetrainType.MaxDegreeOfFreedom, yaw_mode=YawMode(), lookahead=-1, adaptive_lookahead=1,
-                       vehicle_name=''):
-        return _Future(self._mc.move_to_gps(latitude, longitude, altitude, velocity, timeout_sec, drivetrain,
-                                            yaw_mode.is_rate, yaw_mode.yaw_or_rate, lookahead, adaptive_lookahead,
-                                            vehicle_name))
+    def moveByAngleRatesThrottleAsync(self, roll_rate, pitch_rate, yaw_rate, throttle, duration, vehicle_name=''):
+        if not _dur(duration):
+            return _DoneFuture()
+        return self._cmd('moveByAngleRatesThrottleAsync', vehicle_name, self._mc.move_by_angle_rates_throttle, roll_rate,
+                         pitch_rate, yaw_rate, throttle, duration, vehicle_name)
 
     # The terms air_sim's loops have (docs/compatibility.md): the others must be 0.
     _GAIN_TERMS = {'angle_rate': 'pid', 'angle_level': 'p', 'velocity': 'pi', 'position': 'p'}
 
     def _set_gains(self, call, loop, gains, vehicle_name):
+        self._s.actor(vehicle_name)
         kp, ki, kd = gains.to_lists()
         terms = self._GAIN_TERMS[loop]
         for name, values in (('i', ki), ('d', kd)):
@@ -394,252 +1607,176 @@ class MultirotorClient:
     def setPositionControllerGains(self, position_gains=PositionControllerGains(), vehicle_name=''):
         self._set_gains('setPositionControllerGains', 'position', position_gains, vehicle_name)
 
-    def simSetWind(self, wind):
-        """One wind (m/s, world NED) for every drone, added to the weather's wind."""
-        self._mc.set_wind((wind.x_val, wind.y_val, wind.z_val))
+    def trackTargetAsync(self, position, velocity, max_speed=0.0, duration=1.0, vehicle_name=''):
+        """Lockstep extension: follow a moving target (NED position m, velocity m/s, from this drone's home)."""
+        return self._cmd('trackTargetAsync', vehicle_name, self._mc.track_target, tuple(position), tuple(velocity),
+                         max_speed, duration, vehicle_name)
 
-    def simSetKinematics(self, state, ignore_collision, vehicle_name=''):
-        """Pose, linear velocity (world NED) and angular velocity (body FRD) at once; accelerations are ignored
-        (air_sim derives them from the next step)."""
-        self._drone(vehicle_name)
-        o = state.orientation
-
-        def t(v):
-            return (v.x_val, v.y_val, v.z_val)
-        self._mc.set_kinematics(t(state.position), (o.w_val, o.x_val, o.y_val, o.z_val), t(state.linear_velocity),
-                                t(state.angular_velocity), vehicle_name)
-
-    # --- state ---
     def getMultirotorState(self, vehicle_name=''):
-        self._drone(vehicle_name)
+        a = self._s.actor(vehicle_name)
         s = self._mc.state(vehicle_name)
         out = MultirotorState()
-        k = out.kinematics_estimated
-        k.position = _v(s['position'])
-        k.orientation = _q(s['orientation'])
-        k.linear_velocity = _v(s['linear_velocity'])
-        k.angular_velocity = _v(s['angular_velocity'])
-        k.linear_acceleration = _v(s['linear_acceleration'])
-        k.angular_acceleration = _v(s['angular_acceleration'])
-        out.collision = self._collision(s['collision'])
-        out.timestamp = s['timestamp']
+        out.kinematics_estimated = _kinematics(s)
+        out.collision = self._collision(s)
+        out.timestamp = int(s['timestamp'])
         out.landed_state = LandedState.Landed if s['landed'] else LandedState.Flying
-        out.can_arm = True
+        st = self._client.state(a)
+        if st:
+            out.gps_location = GeoPoint(*self._s.enu_to_geo(*st['transform'][:3]))
+        rc = self._s.rc.get(a)
+        if rc is not None:
+            out.rc_data = rc
+        out.ready, out.ready_message, out.can_arm = True, '', True
         return out
 
     def getRotorStates(self, vehicle_name=''):
+        self._s.actor(vehicle_name)
         s = self._mc.state(vehicle_name)
         out = RotorStates()
-        out.timestamp = s['timestamp']
+        out.timestamp = int(s['timestamp'])
         out.rotors = [{'speed': sp, 'thrust': th, 'torque_scaler': 0.0}
                       for sp, th in zip(s['rotor_speeds'], s['rotor_thrusts'])]
         return out
 
-    def simGetGroundTruthKinematics(self, vehicle_name=''):
-        return self.getMultirotorState(vehicle_name).kinematics_estimated
 
-    def _collision(self, c):
-        has, normal, impact, pos, depth, obj_id, obj_name, frame = c
-        out = CollisionInfo()
-        out.has_collided = has
-        out.normal, out.impact_point, out.position = _v(normal), _v(impact), _v(pos)
-        out.penetration_depth = depth
-        out.object_id = obj_id if obj_name else -1
-        out.object_name = obj_name
-        out.time_stamp = frame
+def _kinematics(s):
+    k = KinematicsState()
+    k.position = _v(s['position'])
+    k.orientation = _q(s['orientation'])
+    k.linear_velocity = _v(s['linear_velocity'])
+    k.angular_velocity = _v(s['angular_velocity'])
+    k.linear_acceleration = _v(s['linear_acceleration'])
+    k.angular_acceleration = _v(s['angular_acceleration'])
+    return k
+
+
+# --------------------------------------------------------------------------- CarClient
+class CarClient(VehicleClient):
+    """AirSim's CarClient on ground_sim's vehicles: SimMode "Car" or a car named by its
+    role_name (or 'Car<id>')."""
+
+    def _car(self, vehicle_name):
+        cars = [a for a in self._client.actors() if a['kind'] == 'vehicle']
+        for a in cars:
+            role = a['attributes'].get('role_name', '')
+            if not vehicle_name or vehicle_name in (role, 'Car%d' % a['id']):
+                return a
+        if not vehicle_name and not cars:
+            s = self._s.load_settings()
+            v = s.all_vehicles()[0] if s.sim_mode == 'Car' else None
+            name = v.name if v else 'PhysXCar'
+            sx, sy, sz = self._s.start()
+            try:
+                sp = self._client.map().spawn_points(25.0)[0]
+                pose = (sp[0], sp[1], sp[2] + 0.3) + geo.ned_to_enu_quat(Quaternionr())
+            except (lockstep.ClientError, IndexError):
+                pose = (sx, sy, sz + 0.3, 1.0, 0.0, 0.0, 0.0)
+            bps = sorted(d['id'] for d in self._client.blueprints(1.0) if d['id'].startswith('vehicle.'))
+            if not bps:
+                _unsupported('CarClient', 'no ground_sim service is running')
+            self._client.spawn(bps[0], pose, {'role_name': name})
+            self._s.wait_frames(2)
+            return self._car(vehicle_name)
+        raise lockstep.ClientError("no car named '%s'" % vehicle_name)
+
+    def setCarControls(self, controls, vehicle_name=''):
+        a = self._car(vehicle_name)
+        reverse = controls.is_manual_gear and controls.manual_gear < 0 or controls.throttle < 0
+        self._client.submit({'type': 'vehicle_control', 'actor': a['id'], 'throttle': float(min(abs(controls.throttle), 1)),
+                             'steer': float(max(-1.0, min(1.0, controls.steering))), 'brake': float(controls.brake),
+                             'hand_brake': bool(controls.handbrake), 'reverse': bool(reverse),
+                             'manual_gear_shift': bool(controls.is_manual_gear), 'gear': int(controls.manual_gear)})
+        self._s.cameras.setdefault(('car_controls', a['id']), {})['controls'] = controls
+
+    def getCarControls(self, vehicle_name=''):
+        from .types import CarControls
+        a = self._car(vehicle_name)
+        return self._s.cameras.get(('car_controls', a['id']), {}).get('controls', CarControls())
+
+    def getCarState(self, vehicle_name=''):
+        a = self._car(vehicle_name)
+        st = self._client.state(a['id'])
+        home = a['spawn_transform'][:3]
+        out = CarState()
+        if st is None:
+            return out
+        v = st['velocity']
+        out.speed = math.sqrt(sum(x * x for x in v))
+        out.gear = int(st.get('gear', 0))
+        out.handbrake = bool(st.get('control', {}).get('hand_brake', False))
+        k = KinematicsState()
+        k.position = _v(geo.enu_to_ned_pos(st['transform'][:3], home))
+        k.orientation = geo.enu_to_ned_quat(st['transform'][3:7])
+        k.linear_velocity = _v(geo.enu_to_ned_pos(v, (0, 0, 0)))
+        k.angular_velocity = _v(st['angular_velocity'])
+        k.linear_acceleration = _v(geo.enu_to_ned_pos(st['acceleration'], (0, 0, 0)))
+        out.kinematics_estimated = k
+        out.timestamp = int(round(self._s.sim_time() * 1e9))
         return out
 
-    def simGetCollisionInfo(self, vehicle_name=''):
-        self._drone(vehicle_name)
-        return self._collision(self._mc.state(vehicle_name)['collision'])
 
-    def simGetVehiclePose(self, vehicle_name=''):
-        self._drone(vehicle_name)
-        p, q = self._mc.pose(vehicle_name)
-        return Pose(_v(p), _q(q))
-
-    def simSetVehiclePose(self, pose, ignore_collision, vehicle_name=''):
-        o = pose.orientation
-        self._mc.set_pose((pose.position.x_val, pose.position.y_val, pose.position.z_val),
-                          (o.w_val, o.x_val, o.y_val, o.z_val), vehicle_name)
-
-    def getHomeGeoPoint(self, vehicle_name=''):
-        return self.getGpsData('', vehicle_name).gnss.geo_point
-
-    # --- sensors (spawned on first use, attached to the drone) ---
-    def getImuData(self, imu_name='', vehicle_name=''):
-        # AirSim's IMU bias instability (a random walk; sensor.other.imu has it off, as CARLA).
-        s = _attached_sensors(self._client).latest('getImuData', self._drone(vehicle_name), 'sensor.other.imu', imu_name,
-                                                   _AIRSIM_IMU_ATTRIBUTES)
-        f = s.fields()
-        out = ImuData()
-        out.time_stamp = int(s.sim_time * 1e9)
-        from lockstep._lockstep import Multirotor  # noqa: F401 (same process)
-        a, g = f['accelerometer'], f['gyroscope']
-        out.linear_acceleration = Vector3r(a[0], -a[1], -a[2])   # FLU -> FRD
-        out.angular_velocity = Vector3r(g[0], -g[1], -g[2])
-        w, x, y, z = f['orientation']
-        out.orientation = self._ned_quat((w, x, y, z))
-        return out
-
-    @staticmethod
-    def _ned_quat(q):
-        # ENU/FLU -> NED/FRD: q_ned = qA * q * qB (see lockstep/client/multirotor.h).
-        def mul(a, b):
-            aw, ax, ay, az = a
-            bw, bx, by, bz = b
-            return (aw * bw - ax * bx - ay * by - az * bz, aw * bx + ax * bw + ay * bz - az * by,
-                    aw * by - ax * bz + ay * bw + az * bx, aw * bz + ax * by - ay * bx + az * bw)
-        r = mul(mul((0, math.sqrt(0.5), math.sqrt(0.5), 0), q), (0, 1, 0, 0))
-        if r[0] < 0:
-            r = tuple(-v for v in r)
-        return Quaternionr(r[1], r[2], r[3], r[0])
-
-    def getGpsData(self, gps_name='', vehicle_name=''):
-        s = _attached_sensors(self._client).latest('getGpsData', self._drone(vehicle_name), 'sensor.other.gnss', gps_name)
-        f = s.fields()
-        out = GpsData()
-        out.time_stamp = int(s.sim_time * 1e9)
-        out.gnss.geo_point = GeoPoint(f['latitude'], f['longitude'], f['altitude'])
-        out.gnss.eph, out.gnss.epv = f['eph'], f['epv']
-        out.gnss.fix_type = 3 if f['fix'] else 0
-        out.is_valid = True
-        return out
-
-    def getBarometerData(self, barometer_name='', vehicle_name=''):
-        s = _attached_sensors(self._client).latest('getBarometerData', self._drone(vehicle_name), 'sensor.other.barometer', barometer_name)
-        f = s.fields()
-        out = BarometerData()
-        out.time_stamp = int(s.sim_time * 1e9)
-        out.altitude, out.pressure, out.qnh = f['altitude'], f['pressure'], f['qnh']
-        return out
-
-    def getMagnetometerData(self, magnetometer_name='', vehicle_name=''):
-        s = _attached_sensors(self._client).latest('getMagnetometerData', self._drone(vehicle_name), 'sensor.other.magnetometer',
-                                 magnetometer_name)
-        m = s.fields()['magnetic_field']
-        out = MagnetometerData()
-        out.time_stamp = int(s.sim_time * 1e9)
-        out.magnetic_field_body = Vector3r(m[0], -m[1], -m[2])
-        return out
-
-    def getDistanceSensorData(self, distance_sensor_name='', vehicle_name=''):
-        s = _attached_sensors(self._client).latest('getDistanceSensorData', self._drone(vehicle_name), 'sensor.other.distance',
-                                 distance_sensor_name)
-        f = s.fields()
-        out = DistanceSensorData()
-        out.time_stamp = int(s.sim_time * 1e9)
-        out.distance, out.min_distance, out.max_distance = f['distance'], f['min_distance'], f['max_distance']
-        return out
-
-    def getLidarData(self, lidar_name='', vehicle_name=''):
-        s = _attached_sensors(self._client).latest('getLidarData', self._drone(vehicle_name), 'sensor.lidar.ray_cast', lidar_name)
-        pts = np.array(s.array(), dtype=np.float32)[:, :3]
-        pts[:, 1] *= -1   # FLU -> FRD
-        pts[:, 2] *= -1
-        out = LidarData()
-        out.time_stamp = int(s.sim_time * 1e9)
-        out.point_cloud = pts.reshape(-1).tolist()
-        return out
-
-    def simGetImages(self, requests, vehicle_name='', external=False):
-        if external:
-            _unsupported('simGetImages(external=True)', 'external cameras are spawned with the CARLA API')
-        actor = self._drone(vehicle_name)
-        out = []
-        for r in requests:
-            bp = _IMAGE_BLUEPRINTS.get(r.image_type)
-            if bp is None:
-                _unsupported('simGetImages(image_type=%d)' % r.image_type, 'no camera renders that image type')
-            mount = _CAMERAS.get(str(r.camera_name))
-            if mount is None:
-                _unsupported("simGetImages(camera_name=%r)" % r.camera_name, 'cameras are named %s' % sorted(_CAMERAS))
-            (x, y, z), pitch = mount
-            pose = (x, y, z) + _quat_yaw_pitch(math.radians(180) if pitch == 180 else 0.0,
-                                               -math.radians(pitch) if pitch != 180 else 0.0)
-            s = _attached_sensors(self._client).latest('simGetImages', actor, bp, 'camera_%s_%d' % (r.camera_name, r.image_type),
-                                     {'image_size_x': '256', 'image_size_y': '144', 'fov': '90'}, pose)
-            out.append(self._image_response(s, r))
-        return out
-
-    def simGetImage(self, camera_name, image_type, vehicle_name='', external=False):
-        from .types import ImageRequest
-        return self.simGetImages([ImageRequest(camera_name, image_type, False, True)], vehicle_name)[0].image_data_uint8
-
-    @staticmethod
-    def _image_response(s, r):
-        f = s.fields()
-        resp = ImageResponse()
-        resp.camera_name = r.camera_name
-        resp.image_type = r.image_type
-        resp.width, resp.height = f['width'], f['height']
-        resp.time_stamp = int(s.sim_time * 1e9)
-        resp.frame = s.frame
-        resp.pixels_as_float = r.pixels_as_float
-        resp.compress = r.compress
-        a = s.array()
-        if r.pixels_as_float:
-            if a.ndim == 2:
-                resp.image_data_float = a.astype(np.float32).reshape(-1).tolist()
-            else:
-                b, g, rr = a[..., 0].astype(np.float64), a[..., 1].astype(np.float64), a[..., 2].astype(np.float64)
-                resp.image_data_float = (1000.0 * (rr + g * 256 + b * 65536) / (256 ** 3 - 1)).reshape(-1).tolist()
-            return resp
-        if a.ndim == 2:
-            a = np.repeat(np.clip(a / max(float(a.max()), 1e-6) * 255, 0, 255).astype(np.uint8)[..., None], 4, axis=2)
-        bgr = np.ascontiguousarray(a[..., :3])
-        resp.image_data_uint8 = _png(np.ascontiguousarray(bgr[..., ::-1])) if r.compress else bgr.tobytes()
-        return resp
-
-    # --- weather ---
-    def simEnableWeather(self, enable):
-        self._weather_enabled = bool(enable)
-
-    def simSetWeatherParameter(self, param, val):
-        """AirSim's weather (0..1) mapped onto CARLA's WeatherParameters (0..100)."""
-        fields = {WeatherParameter.Rain: 'precipitation', WeatherParameter.Roadwetness: 'wetness',
-                  WeatherParameter.Fog: 'fog_density', WeatherParameter.Dust: 'dust_storm'}
-        if param not in fields:
-            _unsupported('simSetWeatherParameter(%d)' % param, 'snow and leaves are not rendered')
-        self._client.set_weather({fields[param]: float(val) * 100.0})
-
-    # --- not supported ---
-    def simGetObjectPose(self, object_name):
-        _unsupported('simGetObjectPose', 'scene objects are not exposed over the wire')
-
-    def simSetObjectPose(self, *args, **kwargs):
-        _unsupported('simSetObjectPose', 'scene objects are not exposed over the wire')
-
-    def simListSceneObjects(self, *args, **kwargs):
-        _unsupported('simListSceneObjects', 'scene objects are not exposed over the wire')
-
-    def simSetSegmentationObjectID(self, *args, **kwargs):
-        _unsupported('simSetSegmentationObjectID', "segmentation ids are CARLA's semantic tags")
-
-    def simPrintLogMessage(self, message, message_param='', severity=0):
-        print('%s %s' % (message, message_param))
-
-    def simFlushPersistentMarkers(self):
-        _unsupported('simFlushPersistentMarkers', 'there is no viewport to draw in')
-
-    def simPlotPoints(self, *args, **kwargs):
-        _unsupported('simPlotPoints', 'there is no viewport to draw in')
-
-    def simPlotLineStrip(self, *args, **kwargs):
-        _unsupported('simPlotLineStrip', 'there is no viewport to draw in')
-
-    def simSetTimeOfDay(self, *args, **kwargs):
-        _unsupported('simSetTimeOfDay', "set the sun angles with the CARLA API's WeatherParameters")
-
-    def simSetCameraPose(self, *args, **kwargs):
-        _unsupported('simSetCameraPose', 'cameras are fixed mounts; spawn others with the CARLA API')
-
-    def simSetCameraFov(self, *args, **kwargs):
-        _unsupported('simSetCameraFov', "a camera's fov is a spawn attribute; spawn another with the CARLA API")
-
-    def simGetSegmentationObjectID(self, *args, **kwargs):
-        _unsupported('simGetSegmentationObjectID', "segmentation ids are CARLA's semantic tags")
+# --------------------------------------------------------------------------- helpers
+def _encode(resp, it, arr):
+    """AirSim's encodings: float images as floats (pixels_as_float) or 8-bit grey; colour
+    images as 3-channel BGR bytes, or RGBA PNG when compressed."""
+    if it in (ImageType.OpticalFlow, ImageType.OpticalFlowVis):
+        flow = arr.astype(np.float32)
+        px = flow * np.array([arr.shape[1] / 2.0, arr.shape[0] / 2.0], dtype=np.float32)   # pixels
+        if resp.pixels_as_float:
+            resp.image_data_float = px.reshape(-1).tolist()
+            return
+        bgr = _flow_vis(px) if it == ImageType.OpticalFlowVis else \
+            np.clip(np.dstack([np.zeros(px.shape[:2]), px[..., 1] + 128, px[..., 0] + 128]), 0, 255).astype(np.uint8)
+    elif arr.ndim == 2 and arr.dtype != np.uint8:
+        f = arr.astype(np.float32)
+        if resp.pixels_as_float:
+            resp.image_data_float = f.reshape(-1).tolist()
+            return
+        if it in (ImageType.DepthPlanar, ImageType.DepthPerspective):
+            g = np.clip(f / 100.0, 0, 1) * 255   # as DepthVis
+        else:
+            g = np.clip(f, 0, 1) * 255
+        g = np.round(g).astype(np.uint8)
+        bgr = np.repeat(g[..., None], 3, axis=2)
+    elif arr.ndim == 2:
+        if resp.pixels_as_float:
+            resp.image_data_float = (arr.astype(np.float32) / (255.0 if it == ImageType.DepthVis else 1.0)).reshape(-1).tolist()
+            return
+        bgr = np.repeat(arr[..., None], 3, axis=2)
+    else:
+        bgr = np.ascontiguousarray(arr[..., :3])
+        if resp.pixels_as_float:
+            resp.image_data_float = (bgr.astype(np.float32) / 255.0).reshape(-1).tolist()
+            return
+    if resp.compress:
+        rgba = np.concatenate([bgr[..., ::-1], np.full(bgr.shape[:2] + (1,), 255, np.uint8)], axis=2)
+        resp.image_data_uint8 = _png(rgba)
+    else:
+        resp.image_data_uint8 = np.ascontiguousarray(bgr).tobytes()
 
 
+def _projection_matrix(fov_deg, width, height):
+    """AirSim's CameraInfo.proj_mat: Unreal's reversed-Z perspective (near plane 10 cm)
+    with the horizontal FOV, as a 4x4 list."""
+    t = math.tan(math.radians(fov_deg) / 2)
+    aspect = width / float(height)
+    near = 10.0   # cm
+    return [[1.0 / t, 0.0, 0.0, 0.0], [0.0, aspect / t, 0.0, 0.0], [0.0, 0.0, 0.0, 1.0], [0.0, 0.0, near, 0.0]]
 
-VehicleClient = MultirotorClient
+
+def _sun_position(when, lat, lon):
+    """Sun altitude and azimuth (deg) at UTC `when` (NOAA's simple algorithm)."""
+    doy = when.timetuple().tm_yday
+    hour = when.hour + when.minute / 60.0 + when.second / 3600.0
+    g = 2 * math.pi / 365 * (doy - 1 + (hour - 12) / 24)
+    decl = 0.006918 - 0.399912 * math.cos(g) + 0.070257 * math.sin(g) - 0.006758 * math.cos(2 * g) + \
+        0.000907 * math.sin(2 * g) - 0.002697 * math.cos(3 * g) + 0.00148 * math.sin(3 * g)
+    eqt = 229.18 * (0.000075 + 0.001868 * math.cos(g) - 0.032077 * math.sin(g) - 0.014615 * math.cos(2 * g) -
+                    0.040849 * math.sin(2 * g))
+    tst = hour * 60 + eqt + 4 * lon
+    ha = math.radians(tst / 4 - 180)
+    la = math.radians(lat)
+    cz = math.sin(la) * math.sin(decl) + math.cos(la) * math.cos(decl) * math.cos(ha)
+    zen = math.acos(max(-1.0, min(1.0, cz)))
+    az = math.degrees(math.atan2(math.sin(ha), math.cos(ha) * math.sin(la) - math.tan(decl) * math.cos(la))) + 180
+    return 90 - math.degrees(zen), az % 360

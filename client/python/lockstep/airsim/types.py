@@ -6,15 +6,31 @@ __all__ = ['Vector3r', 'Vector2r', 'Quaternionr', 'Pose', 'YawMode', 'Drivetrain
            'RCData', 'ImuData', 'GnssReport', 'GpsData', 'BarometerData', 'MagnetometerData', 'DistanceSensorData',
            'LidarData', 'WeatherParameter', 'to_quaternion', 'to_eularian_angles', 'EnvironmentState', 'RotorStates',
            'PIDGains', 'AngleRateControllerGains', 'AngleLevelControllerGains', 'VelocityControllerGains',
-           'PositionControllerGains']
+           'PositionControllerGains', 'GnssFixType', 'ProjectionMatrix', 'CameraInfo', 'Box2D', 'Box3D', 'DetectionInfo',
+           'CarControls', 'CarState', 'MeshPositionVertexBuffersResponse', 'MsgpackMixin']
+
+
+def _is_number(v):
+    return isinstance(v, (int, float)) and not isinstance(v, bool) or type(v).__module__ == 'numpy' and \
+        getattr(v, 'ndim', 1) == 0
 
 
 class MsgpackMixin:
+    """AirSim's base of its message types: repr of the fields, to_msgpack / from_msgpack."""
+
     def __repr__(self):
-        return '<%s> %s' % (type(self).__name__, {k: v for k, v in self.__dict__.items()})
+        from pprint import pformat
+        return '<' + type(self).__name__ + '> ' + pformat(vars(self), indent=4, width=1)
 
     def to_msgpack(self, *args, **kwargs):
         return self.__dict__
+
+    @classmethod
+    def from_msgpack(cls, encoded):
+        obj = cls()
+        obj.__dict__ = {k: (v if not isinstance(v, dict) else getattr(getattr(obj, k).__class__, 'from_msgpack')(v))
+                        for k, v in encoded.items()}
+        return obj
 
 
 class Vector2r(MsgpackMixin):
@@ -24,7 +40,7 @@ class Vector2r(MsgpackMixin):
 
 class Vector3r(MsgpackMixin):
     def __init__(self, x_val=0.0, y_val=0.0, z_val=0.0):
-        self.x_val, self.y_val, self.z_val = float(x_val), float(y_val), float(z_val)
+        self.x_val, self.y_val, self.z_val = x_val, y_val, z_val
 
     @staticmethod
     def nanVector3r():
@@ -40,25 +56,31 @@ class Vector3r(MsgpackMixin):
         return Vector3r(self.x_val - o.x_val, self.y_val - o.y_val, self.z_val - o.z_val)
 
     def __truediv__(self, k):
+        if not _is_number(k):
+            raise TypeError('unsupported operand type(s) for /: %s and %s' % (type(self), type(k)))
         return Vector3r(self.x_val / k, self.y_val / k, self.z_val / k)
 
     def __mul__(self, k):
+        if not _is_number(k):
+            raise TypeError('unsupported operand type(s) for *: %s and %s' % (type(self), type(k)))
         return Vector3r(self.x_val * k, self.y_val * k, self.z_val * k)
 
-    __rmul__ = __mul__
-
     def dot(self, o):
+        if type(self) is not type(o):
+            raise TypeError("unsupported operand type(s) for 'dot': %s and %s" % (type(self), type(o)))
         return self.x_val * o.x_val + self.y_val * o.y_val + self.z_val * o.z_val
 
     def cross(self, o):
+        if type(self) is not type(o):
+            raise TypeError("unsupported operand type(s) for 'cross': %s and %s" % (type(self), type(o)))
         return Vector3r(self.y_val * o.z_val - self.z_val * o.y_val, self.z_val * o.x_val - self.x_val * o.z_val,
                         self.x_val * o.y_val - self.y_val * o.x_val)
 
     def get_length(self):
-        return math.sqrt(self.dot(self))
+        return (self.x_val ** 2 + self.y_val ** 2 + self.z_val ** 2) ** 0.5
 
     def distance_to(self, o):
-        return (self - o).get_length()
+        return ((self.x_val - o.x_val) ** 2 + (self.y_val - o.y_val) ** 2 + (self.z_val - o.z_val) ** 2) ** 0.5
 
     def to_Quaternionr(self):
         return Quaternionr(self.x_val, self.y_val, self.z_val, 0)
@@ -73,36 +95,89 @@ class Vector3r(MsgpackMixin):
 
 class Quaternionr(MsgpackMixin):
     def __init__(self, x_val=0.0, y_val=0.0, z_val=0.0, w_val=1.0):
-        self.x_val, self.y_val, self.z_val, self.w_val = float(x_val), float(y_val), float(z_val), float(w_val)
+        self.x_val, self.y_val, self.z_val, self.w_val = x_val, y_val, z_val, w_val
 
     @staticmethod
     def nanQuaternionr():
         return Quaternionr(math.nan, math.nan, math.nan, math.nan)
 
+    def containsNan(self):
+        return any(math.isnan(v) for v in (self.w_val, self.x_val, self.y_val, self.z_val))
+
+    def _same(self, o, op):
+        if type(self) is not type(o):
+            raise TypeError("unsupported operand type(s) for %s: %s and %s" % (op, type(self), type(o)))
+
+    def __add__(self, o):
+        self._same(o, '+')
+        return Quaternionr(self.x_val + o.x_val, self.y_val + o.y_val, self.z_val + o.z_val, self.w_val + o.w_val)
+
+    def __sub__(self, o):
+        self._same(o, '-')
+        return Quaternionr(self.x_val - o.x_val, self.y_val - o.y_val, self.z_val - o.z_val, self.w_val - o.w_val)
+
     def __mul__(self, o):
+        self._same(o, '*')
         t, x, y, z = self.w_val, self.x_val, self.y_val, self.z_val
         a, b, c, d = o.w_val, o.x_val, o.y_val, o.z_val
         return Quaternionr(w_val=a * t - b * x - c * y - d * z, x_val=b * t + a * x + d * y - c * z,
                            y_val=c * t + a * y + b * z - d * x, z_val=d * t + z * a + c * x - b * y)
 
+    def __truediv__(self, o):
+        if type(o) is type(self):
+            return self * o.inverse()
+        if _is_number(o):
+            return Quaternionr(self.x_val / o, self.y_val / o, self.z_val / o, self.w_val / o)
+        raise TypeError('unsupported operand type(s) for /: %s and %s' % (type(self), type(o)))
+
+    def dot(self, o):
+        self._same(o, "'dot'")
+        return self.x_val * o.x_val + self.y_val * o.y_val + self.z_val * o.z_val + self.w_val * o.w_val
+
+    def cross(self, o):
+        self._same(o, "'cross'")
+        return (self * o - o * self) / 2
+
+    def outer_product(self, o):
+        self._same(o, "'outer_product'")
+        return (self.inverse() * o - o.inverse() * self) / 2
+
+    def rotate(self, o):
+        """AirSim's: this quaternion rotated by the unit quaternion `o` (o * self * o^-1)."""
+        self._same(o, "'rotate'")
+        if o.get_length() == 1:
+            return o * self * o.inverse()
+        raise ValueError('length of the other Quaternionr must be 1')
+
     def conjugate(self):
         return Quaternionr(-self.x_val, -self.y_val, -self.z_val, self.w_val)
 
+    def star(self):
+        return self.conjugate()
+
     def inverse(self):
-        n = self.get_length() ** 2
-        c = self.conjugate()
-        return Quaternionr(c.x_val / n, c.y_val / n, c.z_val / n, c.w_val / n)
+        return self.star() / self.dot(self)
+
+    def sgn(self):
+        return self / self.get_length()
 
     def get_length(self):
-        return math.sqrt(self.x_val ** 2 + self.y_val ** 2 + self.z_val ** 2 + self.w_val ** 2)
-
-    def rotate(self, v):
-        q = self * Quaternionr(v.x_val, v.y_val, v.z_val, 0) * self.inverse()
-        return Vector3r(q.x_val, q.y_val, q.z_val)
+        return (self.x_val ** 2 + self.y_val ** 2 + self.z_val ** 2 + self.w_val ** 2) ** 0.5
 
     def to_numpy_array(self):
         import numpy as np
         return np.array([self.x_val, self.y_val, self.z_val, self.w_val], dtype=np.float32)
+
+    def __iter__(self):
+        return iter((self.x_val, self.y_val, self.z_val, self.w_val))
+
+
+def _rotate_vector(q, v):
+    """v (Vector3r) rotated by the rotation of q (not necessarily unit)."""
+    n = q.get_length()
+    u = q / n if n > 0 else Quaternionr()
+    r = u * Quaternionr(v.x_val, v.y_val, v.z_val, 0) * u.conjugate()
+    return Vector3r(r.x_val, r.y_val, r.z_val)
 
 
 class Pose(MsgpackMixin):
@@ -115,7 +190,10 @@ class Pose(MsgpackMixin):
         return Pose(Vector3r.nanVector3r(), Quaternionr.nanQuaternionr())
 
     def containsNan(self):
-        return self.position.containsNan()
+        return self.position.containsNan() or self.orientation.containsNan()
+
+    def __iter__(self):
+        return iter((self.position, self.orientation))
 
 
 class YawMode(MsgpackMixin):
@@ -259,13 +337,14 @@ class GeoPoint(MsgpackMixin):
 
 
 class RCData(MsgpackMixin):
-    def __init__(self):
-        self.timestamp = 0
-        self.pitch = self.roll = self.throttle = self.yaw = 0.0
-        self.switch1 = self.switch2 = self.switch3 = self.switch4 = 0
-        self.switch5 = self.switch6 = self.switch7 = self.switch8 = 0
-        self.is_initialized = False
-        self.is_valid = False
+    def __init__(self, timestamp=0, pitch=0.0, roll=0.0, throttle=0.0, yaw=0.0, switch1=0, switch2=0, switch3=0,
+                 switch4=0, switch5=0, switch6=0, switch7=0, switch8=0, is_initialized=False, is_valid=False):
+        self.timestamp = timestamp
+        self.pitch, self.roll, self.throttle, self.yaw = pitch, roll, throttle, yaw
+        self.switch1, self.switch2, self.switch3, self.switch4 = switch1, switch2, switch3, switch4
+        self.switch5, self.switch6, self.switch7, self.switch8 = switch5, switch6, switch7, switch8
+        self.is_initialized = is_initialized
+        self.is_valid = is_valid
 
 
 class MultirotorState(MsgpackMixin):
@@ -342,6 +421,84 @@ class LidarData(MsgpackMixin):
         self.time_stamp = 0
         self.pose = Pose()
         self.segmentation = []
+
+
+class GnssFixType(MsgpackMixin):
+    GNSS_FIX_NO_FIX = 0
+    GNSS_FIX_TIME_ONLY = 1
+    GNSS_FIX_2D_FIX = 2
+    GNSS_FIX_3D_FIX = 3
+
+
+class ProjectionMatrix(MsgpackMixin):
+    def __init__(self, matrix=None):
+        self.matrix = matrix if matrix is not None else []
+
+
+class CameraInfo(MsgpackMixin):
+    def __init__(self):
+        self.pose = Pose()
+        self.fov = -1
+        self.proj_mat = ProjectionMatrix()
+
+
+class Box2D(MsgpackMixin):
+    def __init__(self):
+        self.min = Vector2r()
+        self.max = Vector2r()
+
+
+class Box3D(MsgpackMixin):
+    def __init__(self):
+        self.min = Vector3r()
+        self.max = Vector3r()
+
+
+class DetectionInfo(MsgpackMixin):
+    def __init__(self):
+        self.name = ''
+        self.geo_point = GeoPoint()
+        self.box2D = Box2D()
+        self.box3D = Box3D()
+        self.relative_pose = Pose()
+
+
+class CarControls(MsgpackMixin):
+    def __init__(self, throttle=0, steering=0, brake=0, handbrake=False, is_manual_gear=False, manual_gear=0,
+                 gear_immediate=True):
+        self.throttle, self.steering, self.brake = throttle, steering, brake
+        self.handbrake = handbrake
+        self.is_manual_gear, self.manual_gear, self.gear_immediate = is_manual_gear, manual_gear, gear_immediate
+
+    def set_throttle(self, throttle_val, forward):
+        self.is_manual_gear = False
+        if forward:
+            self.manual_gear = 0
+            self.throttle = abs(throttle_val)
+        else:
+            self.manual_gear = -1
+            self.throttle = -abs(throttle_val)
+
+
+class CarState(MsgpackMixin):
+    def __init__(self):
+        self.speed = 0.0
+        self.gear = 0
+        self.rpm = 0.0
+        self.maxrpm = 0.0
+        self.handbrake = False
+        self.collision = CollisionInfo()
+        self.kinematics_estimated = KinematicsState()
+        self.timestamp = 0
+
+
+class MeshPositionVertexBuffersResponse(MsgpackMixin):
+    def __init__(self):
+        self.position = Vector3r()
+        self.orientation = Quaternionr()
+        self.vertices = 0.0
+        self.indices = 0.0
+        self.name = ''
 
 
 def to_quaternion(pitch, roll, yaw):

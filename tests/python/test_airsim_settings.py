@@ -1,0 +1,183 @@
+"""AirSim's settings.json and AirSim's rules against a running simulation: the vehicles at
+their settings poses from the player start, a camera with its resolution and mount, LiDARs
+with their settings and data frame, AirSim's image types on a known scene, reset() to the
+settings poses, armDisarm without API control."""
+import json
+import math
+import os
+
+import numpy as np
+import pytest
+
+from conftest import has_service
+
+SETTINGS = {
+    'SettingsVersion': 1.2, 'SimMode': 'Multirotor',
+    'Vehicles': {
+        'Drone1': {'VehicleType': 'SimpleFlight', 'X': 0, 'Y': 0, 'Z': 0,
+                   'Cameras': {'probe': {'CaptureSettings': [{'ImageType': t, 'Width': 96, 'Height': 64,
+                                                              'FOV_Degrees': 70} for t in (0, 1, 2, 3)],
+                                         'X': 0.4, 'Y': 0.0, 'Z': 0.05, 'Roll': 0, 'Pitch': -90, 'Yaw': 0}},
+                   'Sensors': {'LocalLidar': {'SensorType': 6, 'Enabled': True, 'NumberOfChannels': 1, 'Range': 30,
+                                              'RotationsPerSecond': 20, 'PointsPerSecond': 4000,
+                                              'VerticalFOVUpper': -90, 'VerticalFOVLower': -90,
+                                              'X': 0, 'Y': 0, 'Z': 0.3, 'DataFrame': 'SensorLocalFrame'},
+                               'WorldLidar': {'SensorType': 6, 'Enabled': True, 'NumberOfChannels': 1, 'Range': 30,
+                                              'RotationsPerSecond': 20, 'PointsPerSecond': 4000,
+                                              'VerticalFOVUpper': -90, 'VerticalFOVLower': -90,
+                                              'X': 0, 'Y': 0, 'Z': 0.3, 'DataFrame': 'VehicleInertialFrame'}}},
+        'Drone2': {'VehicleType': 'SimpleFlight', 'X': 4, 'Y': -3, 'Z': 0, 'Yaw': 90},
+    }}
+
+
+@pytest.fixture(scope='module')
+def client(sim, tmp_path_factory):
+    path = tmp_path_factory.mktemp('airsim') / 'settings.json'
+    path.write_text(json.dumps(SETTINGS))
+    os.environ['LOCKSTEP_AIRSIM_SETTINGS'] = str(path)
+    import airsim
+    c = airsim.MultirotorClient()
+    yield c
+    os.environ.pop('LOCKSTEP_AIRSIM_SETTINGS', None)
+
+
+def _enu(c, name):
+    a = c._s.mc.resolve(name)
+    return c._client.state(a)['transform']
+
+
+def _lift(client):
+    """Drone1 hovering 10 m above its start (once); its start pose."""
+    import airsim
+    start = client.simGetVehiclePose('Drone1')
+    if start.position.z_val < -5:
+        return airsim.Pose(airsim.Vector3r(start.position.x_val, start.position.y_val, start.position.z_val + 10))
+    k = airsim.KinematicsState()
+    k.position = airsim.Vector3r(start.position.x_val, start.position.y_val, start.position.z_val - 10.0)
+    k.orientation = airsim.to_quaternion(0, 0, 0)
+    client.enableApiControl(True, 'Drone1')
+    client.armDisarm(True, 'Drone1')
+    client.simSetKinematics(k, True, 'Drone1')
+    client.hoverAsync('Drone1').join()
+    for _ in range(20):
+        client._client.tick()
+    return start
+
+
+def test_vehicles_start_at_their_settings_poses(client):
+    import airsim
+    assert client.listVehicles() == ['Drone1', 'Drone2']
+    d1, d2 = _enu(client, 'Drone1'), _enu(client, 'Drone2')
+    # NED from the player start: X north (ENU +y), Y east (ENU +x); Drone2 is 4 m north and 3 m west of Drone1.
+    assert (d2[1] - d1[1], d2[0] - d1[0]) == (pytest.approx(4.0, abs=0.02), pytest.approx(-3.0, abs=0.02))
+    assert abs(d2[2] - d1[2]) < 0.3   # Z 0 for both: each dropped onto the ground below (a kerb apart at most)
+    yaw1 = airsim.to_eularian_angles(client.simGetVehiclePose('Drone1').orientation)[2]
+    yaw2 = airsim.to_eularian_angles(client.simGetVehiclePose('Drone2').orientation)[2]
+    assert (math.degrees(yaw1), math.degrees(yaw2)) == (pytest.approx(0, abs=1), pytest.approx(90, abs=1))
+    # Each vehicle's NED frame starts at its own start, as AirSim's.
+    p = client.getMultirotorState('Drone2').kinematics_estimated.position
+    assert (p.x_val, p.y_val) == (pytest.approx(0, abs=0.05), pytest.approx(0, abs=0.05))
+    # At rest when the script gets them: takeoff is accepted at once (AirSim refuses it while moving).
+    s = client.getMultirotorState('Drone1').kinematics_estimated.linear_velocity
+    assert s.get_length() < 0.05
+
+
+def test_a_settings_camera_has_its_resolution_and_mount(client):
+    if not has_service('render'):
+        pytest.skip('needs render')
+    import airsim
+    r = client.simGetImages([airsim.ImageRequest('probe', airsim.ImageType.Scene, False, False)], 'Drone1')[0]
+    assert (r.width, r.height) == (96, 64)
+    assert len(r.image_data_uint8) == 96 * 64 * 3
+    info = client.simGetCameraInfo('probe', 'Drone1')
+    assert info.fov == pytest.approx(70)
+    pitch, roll, yaw = airsim.to_eularian_angles(info.pose.orientation)
+    assert math.degrees(pitch) == pytest.approx(-90, abs=0.5)
+    body = client.simGetVehiclePose('Drone1').position
+    assert (info.pose.position - body).x_val == pytest.approx(0.4, abs=0.01)
+    assert (info.pose.position - body).z_val == pytest.approx(0.05, abs=0.01)
+    # The default cameras are there too, at AirSim's 256 x 144.
+    r = client.simGetImages([airsim.ImageRequest('0', airsim.ImageType.Scene)], 'Drone1')[0]
+    assert (r.width, r.height) == (256, 144) and r.image_data_uint8[:4] == b'\x89PNG'
+
+
+def test_airsim_image_types_on_a_known_scene(client):
+    """The probe camera looks straight down from 10 m over the flat ground: DepthPlanar 10,
+    DepthPerspective 10 / cos, DepthVis 10/100 grey, compressed PNGs as RGBA."""
+    if not (has_service('render') and has_service('sensors')):
+        pytest.skip('needs render and sensors')
+    import airsim
+    import cv2
+    start = _lift(client)
+    reqs = [airsim.ImageRequest('probe', t, True, False) for t in (1, 2)] + \
+        [airsim.ImageRequest('probe', 3, False, False), airsim.ImageRequest('probe', 3, False, True)]
+    client.simGetImages(reqs, 'Drone1')   # spawns the cameras
+    client._client.tick()                 # then one frame for all of them
+    planar, persp, vis, vis_png = client.simGetImages(reqs, 'Drone1')
+    assert planar.frame == persp.frame == vis.frame
+    assert (planar.width, planar.height, persp.width, vis.width) == (96, 64, 96, 96)
+    # The truth: the LiDAR 30 cm under the body measures its height over the ground; the camera is 5 cm
+    # under the body, 25 cm above the LiDAR.
+    lidar = np.array(client.getLidarData('LocalLidar', 'Drone1').point_cloud, np.float32).reshape(-1, 3)
+    expect = float(np.median(lidar[:, 2])) + 0.25
+    assert expect == pytest.approx(10.0, abs=0.5)
+    d = np.array(planar.image_data_float, np.float32).reshape(planar.height, planar.width)
+    c = d[planar.height // 2 - 2:planar.height // 2 + 2, planar.width // 2 - 2:planar.width // 2 + 2]
+    assert float(np.median(c)) == pytest.approx(expect, abs=0.05)
+    assert float(np.ptp(d[planar.height // 2 - 4:planar.height // 2 + 4, planar.width // 2 - 4:planar.width // 2 + 4])) \
+        < 0.03   # a plane
+    p = np.array(persp.image_data_float, np.float32).reshape(persp.height, persp.width)
+    f = persp.width / 2 / math.tan(math.radians(70) / 2)
+    u, v = persp.width // 4, persp.height // 2
+    ray = math.sqrt(1 + ((u + 0.5 - persp.width / 2) / f) ** 2 + ((v + 0.5 - persp.height / 2) / f) ** 2)
+    assert p[v, u] == pytest.approx(d[v, u] * ray, rel=1e-3)
+    g = np.frombuffer(vis.image_data_uint8, np.uint8).reshape(vis.height, vis.width, 3)
+    assert int(g[vis.height // 2, vis.width // 2, 0]) == pytest.approx(round(float(np.median(c)) / 100 * 255), abs=1)
+    png = cv2.imdecode(np.frombuffer(vis_png.image_data_uint8, np.uint8), cv2.IMREAD_UNCHANGED)
+    assert png.shape == (vis.height, vis.width, 4) and png[0, 0, 3] == 255
+    assert planar.time_stamp > 0 and planar.camera_position.z_val < start.position.z_val - 9
+
+
+def test_lidars_have_their_settings_and_data_frame(client):
+    if not has_service('sensors'):
+        pytest.skip('needs sensors')
+    _lift(client)
+    # Straight down from 30 cm under the body (clear of it): one channel at -90 deg, 30 m range.
+    local = client.getLidarData('LocalLidar', 'Drone1')
+    world = client.getLidarData('WorldLidar', 'Drone1')
+    pl = np.array(local.point_cloud, dtype=np.float32).reshape(-1, 3)
+    pw = np.array(world.point_cloud, dtype=np.float32).reshape(-1, 3)
+    assert len(pl) > 10 and len(pw) > 10
+    body = client.simGetVehiclePose('Drone1').position
+    h = float(np.median(pl[:, 2]))
+    # SensorLocalFrame: FRD of the sensor, the ground below is +z (down) at the sensor's height (~10 m up).
+    assert 5.0 < h < 15.0
+    assert np.abs(pl[:, :2]).max() < 0.05
+    # VehicleInertialFrame: the vehicle's NED frame from its home: the ground at z = body z + 0.3 + h.
+    assert float(np.median(pw[:, 2])) == pytest.approx(body.z_val + 0.3 + h, abs=0.02)
+    assert (world.pose.position - body).z_val == pytest.approx(0.3, abs=1e-3)   # LidarData.pose: the LiDAR's
+    assert world.time_stamp > 1e6   # ns
+
+
+def test_arm_without_api_control_returns_false_and_reset_returns_vehicles(client):
+    client.enableApiControl(False, 'Drone2')
+    assert client.armDisarm(True, 'Drone2') is False
+    assert not client.isApiControlEnabled('Drone2')
+    # API control is the vehicle's: another client of the process sees it.
+    import airsim
+    other = airsim.MultirotorClient()
+    client.enableApiControl(True, 'Drone2')
+    assert other.isApiControlEnabled('Drone2')
+    assert other.armDisarm(True, 'Drone2') is True
+    z0 = client.getMultirotorState('Drone2').kinematics_estimated.position.z_val
+    assert other.takeoffAsync(vehicle_name='Drone2').join()
+    assert other.moveByVelocityAsync(1, 0, 0, 0, vehicle_name='Drone2').join()   # duration 0: AirSim returns at once
+    assert client.getMultirotorState('Drone2').kinematics_estimated.position.z_val < z0 - 1.5
+    before = _enu(client, 'Drone1')
+    client.reset()
+    p = client.getMultirotorState('Drone2').kinematics_estimated.position
+    assert (p.x_val, p.y_val, p.z_val) == (pytest.approx(0, abs=0.05), pytest.approx(0, abs=0.05),
+                                           pytest.approx(z0, abs=0.05))   # back at its start, at rest
+    assert not client.isApiControlEnabled('Drone2')
+    assert client.listVehicles() == ['Drone1', 'Drone2']   # the same vehicles: no new run
+    assert _enu(client, 'Drone1')[0] == pytest.approx(before[0], abs=0.05)

@@ -112,6 +112,25 @@ def test_walker_pose_types_exist():
     assert issubclass(carla.TrafficLight, carla.TrafficSign)
 
 
+def test_traffic_manager_calls_of_carla_exist():
+    tm = carla.TrafficManager.__new__(carla.TrafficManager)
+    for name, args in (('vehicle_lane_offset', (None, 0.5)), ('global_lane_offset', (0.5,)),
+                       ('collision_detection', (None, None, False)),
+                       ('set_boundaries_respawn_dormant_vehicles', (25.0, 70.0))):
+        with pytest.raises(carla.LockstepUnsupported, match=r'TrafficManager\.%s is not supported' % name):
+            getattr(tm, name)(*args)
+    # A fallback never replaces an implementation.
+    from lockstep.carla.errors import add_unsupported
+
+    class Implemented:
+        def call(self):
+            return 1
+    add_unsupported(Implemented, {'call': 'no', 'other': 'no'})
+    assert Implemented().call() == 1
+    with pytest.raises(carla.LockstepUnsupported):
+        Implemented().other()
+
+
 # --- against a simulation ------------------------------------------------------------------
 
 def _free_spawn(world, bp, start=3):

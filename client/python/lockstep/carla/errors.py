@@ -15,6 +15,8 @@ def add_unsupported(cls, why_by_name):
     """Gives `cls` a method per name that raises LockstepUnsupported naming
     '<class>.<name>' and why, so a CARLA call Lockstep lacks never ends in AttributeError."""
     for name, why in why_by_name.items():
+        if name in cls.__dict__:
+            continue  # the class implements it (an implementation wins over the fallback)
         def method(self, *args, _call='%s.%s' % (cls.__name__, name), _why=why, **kwargs):
             unsupported(_call, _why)
         method.__name__ = name

@@ -22,13 +22,13 @@ Pose BeforeLight(const Town& town, size_t index, double back, double half_z) {
 // CARLA: every tick at a red light the car stops unless a draw falls below
 // ignore_lights_percentage. At 50 % a car held at a frozen red light therefore creeps over
 // the line sooner or later, whatever its random stream; a draw made once per junction
-// would leave about half of these cars waiting for ever.
+// leaves some waiting for ever (3 of these 12).
 TEST(TmConventions, IgnoreLightsIsDrawnEveryTickSoEveryCarEventuallyRunsTheRed) {
   auto town = testing::Town01();
   const uint32_t light = 1;  // actor id of light index 0
   const Vec3 half = FindVehicle("vehicle.audi.tt")->half_extents;
   int ran = 0;
-  const int worlds = 6;
+  const int worlds = 12;
   for (int seed = 1; seed <= worlds; ++seed) {
     World w(town, static_cast<uint64_t>(seed));
     ASSERT_EQ(w.SetTrafficLight(light, LightColor::kRed, -1, -1, -1, true), "");

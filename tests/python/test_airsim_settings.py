@@ -99,6 +99,10 @@ def test_a_settings_camera_has_its_resolution_and_mount(client):
     # The default cameras are there too, at AirSim's 256 x 144.
     r = client.simGetImages([airsim.ImageRequest('0', airsim.ImageType.Scene)], 'Drone1')[0]
     assert (r.width, r.height) == (256, 144) and r.image_data_uint8[:4] == b'\x89PNG'
+    # The plotting calls draw into the cameras (debug shapes); a bad colour names the call.
+    client.simPlotLineStrip([airsim.Vector3r(0, 0, -1), airsim.Vector3r(5, 0, -1)], duration=1.0)
+    with pytest.raises(airsim.ClientError, match='simPlotPoints'):
+        client.simPlotPoints([airsim.Vector3r(0, 0, -1)], color_rgba=[2, 0, 0, 1])
 
 
 def test_airsim_image_types_on_a_known_scene(client):

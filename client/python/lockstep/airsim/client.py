@@ -238,7 +238,7 @@ class _Sensors:
                     self._cv.notify_all()
 
             c.listen(sensor, on_data)
-        deadline = time.monotonic() + 20.0
+        deadline = time.monotonic() + 60.0
         while True:
             with self._cv:
                 s = slot[1]
@@ -250,7 +250,7 @@ class _Sensors:
                 with self._cv:
                     self._cv.wait(0.1)
             if time.monotonic() > deadline:
-                raise lockstep.ClientError('%s: sensor %s (%s) delivered no data within 20 s' % (call, slot[0], blueprint))
+                raise lockstep.ClientError('%s: sensor %s (%s) delivered no data within 60 s' % (call, slot[0], blueprint))
 
     def drop(self, predicate):
         for key in [k for k in self._slots if predicate(k)]:
@@ -344,11 +344,7 @@ class _Shared:
             walks = [tuple(p[:3]) for p in m.pedestrian_spawn_points(5.0)]
         except lockstep.ClientError:
             spawns, walks = [], []
-        others = []
-        for st in self.client.states().values():
-            t = st.get('transform')
-            if t:
-                others.append(tuple(t[:3]))
+        others = [t[:3] for t in self.actor_positions()]
 
         def d2(a, b):
             return (a[0] - b[0]) ** 2 + (a[1] - b[1]) ** 2
@@ -363,10 +359,22 @@ class _Shared:
         self.player_start = (best[0], best[1], best[2] - 1.0) if best else (ref[0], ref[1], ref[2] - (0.5 if spawns else 0))
         return self.player_start
 
+    def actor_positions(self):
+        """World ENU positions of the run's actors (not sensors)."""
+        out = []
+        for a in self.client.actors():
+            if a['kind'] == 'sensor':
+                continue
+            st = self.client.state(a['id'])
+            t = st.get('transform') if st else None
+            if t:
+                out.append(tuple(t[:3]))
+        return out
+
     def free_at(self, enu, clearance=1.5):
-        for st in self.client.states().values():
-            t = st.get('transform')
-            if t and (t[0] - enu[0]) ** 2 + (t[1] - enu[1]) ** 2 < clearance ** 2 and abs(t[2] - enu[2]) < 3:
+        """No actor of the run within `clearance` m (horizontally, 3 m vertically) of `enu`."""
+        for t in self.actor_positions():
+            if (t[0] - enu[0]) ** 2 + (t[1] - enu[1]) ** 2 < clearance ** 2 and abs(t[2] - enu[2]) < 3:
                 return False
         return True
 
@@ -1289,50 +1297,106 @@ class VehicleClient:
         log.warning('simGetLidarSegmentation API is deprecated, use getLidarData() API instead')
         return self.getLidarData(lidar_name, vehicle_name).segmentation
 
-    # --- plotting (no viewport here: the markers are kept, not drawn) ---
-    def _plot(self, call, kind, points, is_persistent, **kw):
-        for p in points:
-            if not isinstance(p, (Vector3r, Pose)):
-                raise TypeError('%s: points are airsim.Vector3r (or Pose), got %s' % (call, type(p).__name__))
+    # --- plotting: debug shapes the render service draws into its colour cameras ---
+    def _draw(self, call, shapes, color_rgba, duration, is_persistent):
+        """World NED (from the player start) shapes as debug_draw commands (needs render to be
+        seen). AirSim's sizes are Unreal's (cm, points in px): points of `size` px are CARLA's
+        size / 100, thicknesses cm -> m."""
+        if color_rgba is not None and (len(color_rgba) != 4 or any(not 0 <= float(c) <= 1 for c in color_rgba)):
+            raise lockstep.ClientError('%s: color_rgba is 4 values in [0, 1], got %r' % (call, color_rgba))
+        st = self._client.run_status()
+        if st is None or not any(k == 'render' and alive for _, k, alive, _ in st['members']):
+            return
+        dt = self._client.world_info()['settings']['fixed_delta_seconds'] or 0.05
+        life = float(duration) if duration and duration > 0 else (0.0 if is_persistent else dt)
+        col = tuple(int(round(float(c) * 255)) for c in (color_rgba or (1.0, 0.0, 0.0, 1.0)))
+        start = self._s.start()
+        out = []
+        for sh in shapes:
+            d = dict(sh)
+            for k in ('begin', 'end'):
+                if k in d:
+                    v = d[k]
+                    d[k] = geo.ned_to_enu_pos((v.x_val, v.y_val, v.z_val), start)
+            d.setdefault('color', col)
+            d['life_time'] = life
+            d['persistent_lines'] = bool(is_persistent)
+            out.append(d)
+        for k in range(0, len(out), 4096):
+            self._client.submit({'type': 'debug_draw', 'shapes': out[k:k + 4096]})
         if is_persistent:
-            self._s.markers.append((kind, list(points), kw))
+            self._s.markers.append(len(out))
+
+    @staticmethod
+    def _points(call, points):
+        for p in points:
+            if not isinstance(p, Vector3r):
+                raise TypeError('%s: points are airsim.Vector3r, got %s' % (call, type(p).__name__))
+        return list(points)
 
     def simFlushPersistentMarkers(self):
-        self._s.markers.clear()
+        if self._s.markers:
+            _unsupported('simFlushPersistentMarkers', 'no command erases debug shapes: persistent markers last '
+                         'until the run ends')
 
     def simPlotPoints(self, points, color_rgba=[1.0, 0.0, 0.0, 1.0], size=10.0, duration=-1.0, is_persistent=False):
-        self._plot('simPlotPoints', 'points', points, is_persistent, color=color_rgba, size=size)
+        pts = self._points('simPlotPoints', points)
+        self._draw('simPlotPoints', [{'kind': 'point', 'begin': p, 'size': float(size) / 100.0} for p in pts],
+                   color_rgba, duration, is_persistent)
 
     def simPlotLineStrip(self, points, color_rgba=[1.0, 0.0, 0.0, 1.0], thickness=5.0, duration=-1.0,
                          is_persistent=False):
-        self._plot('simPlotLineStrip', 'line_strip', points, is_persistent, color=color_rgba, thickness=thickness)
+        pts = self._points('simPlotLineStrip', points)
+        self._draw('simPlotLineStrip', [{'kind': 'line', 'begin': a, 'end': b, 'size': float(thickness) / 100.0}
+                                        for a, b in zip(pts, pts[1:])], color_rgba, duration, is_persistent)
 
     def simPlotLineList(self, points, color_rgba=[1.0, 0.0, 0.0, 1.0], thickness=5.0, duration=-1.0,
                         is_persistent=False):
-        if len(points) % 2:
-            raise lockstep.ClientError('simPlotLineList: an even number of points, got %d' % len(points))
-        self._plot('simPlotLineList', 'line_list', points, is_persistent, color=color_rgba, thickness=thickness)
+        pts = self._points('simPlotLineList', points)
+        if len(pts) % 2:
+            raise lockstep.ClientError('simPlotLineList: an even number of points, got %d' % len(pts))
+        self._draw('simPlotLineList', [{'kind': 'line', 'begin': a, 'end': b, 'size': float(thickness) / 100.0}
+                                       for a, b in zip(pts[0::2], pts[1::2])], color_rgba, duration, is_persistent)
 
     def simPlotArrows(self, points_start, points_end, color_rgba=[1.0, 0.0, 0.0, 1.0], thickness=5.0, arrow_size=2.0,
                       duration=-1.0, is_persistent=False):
-        if len(points_start) != len(points_end):
+        a, b = self._points('simPlotArrows', points_start), self._points('simPlotArrows', points_end)
+        if len(a) != len(b):
             raise lockstep.ClientError('simPlotArrows: points_start and points_end differ in length')
-        self._plot('simPlotArrows', 'arrows', list(points_start) + list(points_end), is_persistent,
-                   color=color_rgba, thickness=thickness)
+        self._draw('simPlotArrows', [{'kind': 'arrow', 'begin': p, 'end': q, 'size': float(thickness) / 100.0,
+                                      'arrow_size': float(arrow_size) / 100.0} for p, q in zip(a, b)],
+                   color_rgba, duration, is_persistent)
 
     def simPlotStrings(self, strings, positions, scale=5, color_rgba=[1.0, 0.0, 0.0, 1.0], duration=-1.0):
-        if len(strings) != len(positions):
+        pos = self._points('simPlotStrings', positions)
+        if len(strings) != len(pos):
             raise lockstep.ClientError('simPlotStrings: strings and positions differ in length')
-        self._plot('simPlotStrings', 'strings', positions, False)
+        self._draw('simPlotStrings', [{'kind': 'string', 'begin': p, 'text': str(t)[:256]} for t, p in zip(strings, pos)],
+                   color_rgba, duration, False)
+
+    def _axes(self, call, poses, scale, thickness):
+        shapes = []
+        for pose in poses:
+            if not isinstance(pose, Pose):
+                raise TypeError('%s: poses are airsim.Pose, got %s' % (call, type(pose).__name__))
+            for axis, col in (((1, 0, 0), (255, 0, 0, 255)), ((0, 1, 0), (0, 255, 0, 255)), ((0, 0, 1), (0, 0, 255, 255))):
+                tip = pose.position + _rotate_vector(pose.orientation, Vector3r(*axis) * (float(scale) / 100.0))
+                shapes.append({'kind': 'line', 'begin': pose.position, 'end': tip, 'size': float(thickness) / 100.0,
+                               'color': col})
+        return shapes
 
     def simPlotTransforms(self, poses, scale=5.0, thickness=5.0, duration=-1.0, is_persistent=False):
-        self._plot('simPlotTransforms', 'transforms', poses, is_persistent)
+        self._draw('simPlotTransforms', self._axes('simPlotTransforms', poses, scale, thickness), None, duration,
+                   is_persistent)
 
     def simPlotTransformsWithNames(self, poses, names, tf_scale=5.0, tf_thickness=5.0, text_scale=10.0,
                                    text_color_rgba=[1.0, 0.0, 0.0, 1.0], duration=-1.0):
         if len(poses) != len(names):
             raise lockstep.ClientError('simPlotTransformsWithNames: poses and names differ in length')
-        self._plot('simPlotTransformsWithNames', 'transforms', poses, False)
+        shapes = self._axes('simPlotTransformsWithNames', poses, tf_scale, tf_thickness)
+        col = tuple(int(round(float(c) * 255)) for c in text_color_rgba)
+        shapes += [{'kind': 'string', 'begin': p.position, 'text': str(n)[:256], 'color': col} for p, n in zip(poses, names)]
+        self._draw('simPlotTransformsWithNames', shapes, None, duration, False)
 
     # --- tasks, recording, wind, vehicles, settings ---
     def cancelLastTask(self, vehicle_name=''):

@@ -7,6 +7,7 @@
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
+#include <cxxabi.h>
 #include <cstdlib>
 #include <deque>
 #include <map>
@@ -179,7 +180,7 @@ struct Client::Impl {
   std::map<uint32_t, Listener> listeners;
   std::deque<SensorSample> inbox;   // arrival order: per sensor in frame order (one writer each)
   bool dispatching = false;         // a callback is running
-  bool stopping = false;
+  bool stopping = false;            // Shutdown() began: waits end with ClientError
   std::thread dispatcher;
   std::mutex reader_mu;             // creation of the sensor readers
   std::map<SensorType, std::shared_ptr<void>> sensor_readers;
@@ -282,6 +283,19 @@ struct Client::Impl {
 
   ~Impl() { Shutdown(); }
 
+  // close(): waits end, the dispatch thread ends. The readers and the writer stay (another
+  // thread may be inside a call that uses them) until the destructor.
+  void Stop() {
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      stopping = true;
+    }
+    inbox_cv.notify_all();
+    cv.notify_all();        // waits in other threads end (WaitOn checks `stopping`)
+    frame_cv.notify_all();
+    if (dispatcher.joinable() && dispatcher.get_id() != std::this_thread::get_id()) dispatcher.join();
+  }
+
   void Shutdown() {
     // Readers first, so no callback runs while the rest goes away.
     event_reader = {};
@@ -299,12 +313,7 @@ struct Client::Impl {
       sensor_readers.clear();
       image_readers.clear();
     }
-    {
-      std::lock_guard<std::mutex> lock(mu);
-      stopping = true;
-    }
-    inbox_cv.notify_all();
-    if (dispatcher.joinable()) dispatcher.join();
+    Stop();
     if (commands && commands.MatchedReaders() > 0) commands.WaitForAcknowledgments(0.5);
   }
 
@@ -329,16 +338,38 @@ struct Client::Impl {
   bool WaitUntil(std::unique_lock<std::mutex>& lock, Clock::time_point deadline, P pred) {
     return WaitOn(cv, lock, deadline, pred);
   }
+  // A closed client (or one closing) waits no more, and options.interrupted is polled
+  // every kInterruptPoll with `mu` released (it may take the Python GIL).
   template <class P>
   bool WaitOn(std::condition_variable& on, std::unique_lock<std::mutex>& lock, Clock::time_point deadline, P pred) {
+    auto next_poll = Clock::now() + kInterruptPoll;
     while (!pred()) {
-      if (deadline == Clock::time_point::max()) {
+      ThrowIfStopping();
+      if (options.interrupted && Clock::now() >= next_poll) {  // also when notifications keep coming
+        PollInterrupt(lock);
+        next_poll = Clock::now() + kInterruptPoll;
+        continue;
+      }
+      const auto until = options.interrupted ? std::min(deadline, next_poll) : deadline;
+      if (until == Clock::time_point::max()) {
         on.wait(lock);
-      } else if (on.wait_until(lock, deadline) == std::cv_status::timeout) {
+      } else if (on.wait_until(lock, until) == std::cv_status::timeout && until == deadline) {
         return pred();
       }
     }
     return true;
+  }
+  static constexpr auto kInterruptPoll = std::chrono::milliseconds(100);
+  void ThrowIfStopping() const {
+    if (stopping) throw ClientError("client " + options.name + " is closed");
+  }
+  // `lock` holds mu on entry and on return.
+  void PollInterrupt(std::unique_lock<std::mutex>& lock) {
+    if (!options.interrupted) return;
+    lock.unlock();
+    const bool stop = options.interrupted();
+    lock.lock();
+    if (stop) throw Interrupted("interrupted while waiting");
   }
 
   void Connect() {
@@ -357,7 +388,9 @@ struct Client::Impl {
       }
       lock.lock();
       cv.wait_for(lock, std::chrono::milliseconds(5));
+      ThrowIfStopping();
       lock.unlock();
+      if (options.interrupted && options.interrupted()) throw Interrupted("interrupted while connecting");
     }
     // Each side discovers the other's endpoints on its own: our reader may see the
     // coordinator's reply writer before that writer sees our reader, and a reply written
@@ -600,6 +633,8 @@ struct Client::Impl {
       lock.unlock();
       try {
         cb(s);
+      } catch (const abi::__forced_unwind&) {
+        throw;  // the thread is being ended (pthread_exit): let it end
       } catch (...) {
         // A callback's exception must not kill the dispatcher; the Python layer reports its own.
       }
@@ -760,6 +795,13 @@ struct Client::Impl {
 
 Client::Client(ClientOptions options) : impl_(std::make_unique<Impl>(std::move(options))) {}
 Client::~Client() = default;
+
+void Client::close() { impl_->Stop(); }
+
+bool Client::closed() const {
+  std::lock_guard<std::mutex> lock(impl_->mu);
+  return impl_->stopping;
+}
 
 int Client::domain() const { return impl_->options.domain; }
 const std::string& Client::name() const { return impl_->options.name; }
@@ -1140,9 +1182,14 @@ uint64_t Client::send_drone(msg::DroneCommand command) {
 msg::DroneCommandStatus Client::wait_drone(uint32_t actor, uint64_t command_id, double timeout_s) {
   auto& s = *impl_;
   const auto deadline = Deadline(timeout_s);
+  auto next_poll = Clock::now() + s.kInterruptPoll;
   while (true) {
     {
       std::unique_lock<std::mutex> lock(s.mu);
+      if (Clock::now() >= next_poll) {  // synchronous mode: a tick() at a time may never wait 100 ms
+        s.PollInterrupt(lock);
+        next_poll = Clock::now() + s.kInterruptPoll;
+      }
       auto done = s.drone_finished.find({actor, command_id});
       if (done != s.drone_finished.end()) return done->second;
       if (Clock::now() >= deadline) {
@@ -1151,9 +1198,12 @@ msg::DroneCommandStatus Client::wait_drone(uint32_t actor, uint64_t command_id, 
       }
       if (!s.world->settings().synchronous_mode()) {
         const size_t seen = s.air.empty() ? 0 : s.air.rbegin()->first.second;
-        s.cv.wait_until(lock, std::min(deadline, Clock::now() + std::chrono::milliseconds(200)), [&] {
-          return s.drone_finished.count({actor, command_id}) || (!s.air.empty() && s.air.rbegin()->first.second != seen);
+        s.ThrowIfStopping();
+        s.cv.wait_until(lock, std::min(deadline, Clock::now() + s.kInterruptPoll), [&] {
+          return s.stopping || s.drone_finished.count({actor, command_id}) ||
+                 (!s.air.empty() && s.air.rbegin()->first.second != seen);
         });
+        s.ThrowIfStopping();
         if (!s.drone_finished.count({actor, command_id}) && (s.actors_run != s.world->run() || !s.actors.count(actor))) {
           throw ClientError("drone " + std::to_string(actor) + " is gone (destroyed, or a new run began)");
         }

@@ -1,5 +1,7 @@
 #include "embedded_coordinator.h"
 
+#include "gil.h"
+
 #include <pybind11/stl.h>
 
 #include <atomic>
@@ -63,11 +65,11 @@ void AddEmbeddedCoordinator(py::module_& m) {
                                   "loads the launch config (YAML) and starts the clock on a thread of its own. Start "
                                   "the services with `lockstep up CONFIG --no-coordinator`.")
       .def(py::init([](const std::string& config, int domain) {
-             py::gil_scoped_release release;
+             python::ReleaseGil release;
              return std::make_unique<EmbeddedCoordinator>(config, domain);
            }),
            py::arg("config"), py::arg("domain") = -1)
-      .def("close", &EmbeddedCoordinator::Close, py::call_guard<py::gil_scoped_release>(),
+      .def("close", &EmbeddedCoordinator::Close, py::call_guard<python::ReleaseGil>(),
            "stops the clock and leaves the domain; returns the run's exit code (0: normal)")
       .def_property_readonly("running", &EmbeddedCoordinator::running)
       .def_property_readonly("domain", &EmbeddedCoordinator::domain)
@@ -83,7 +85,7 @@ void AddEmbeddedCoordinator(py::module_& m) {
            })
       .def("__enter__", [](EmbeddedCoordinator& c) -> EmbeddedCoordinator& { return c; }, py::return_value_policy::reference)
       .def("__exit__", [](EmbeddedCoordinator& c, py::args) {
-        py::gil_scoped_release release;
+        python::ReleaseGil release;
         c.Close();
       });
 }

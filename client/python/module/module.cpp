@@ -11,6 +11,7 @@
 
 #include "commands.h"
 #include "embedded_coordinator.h"
+#include "gil.h"
 #include "map_queries.h"
 #include "lockstep/client/client.h"
 #include "lockstep/client/multirotor.h"
@@ -343,6 +344,7 @@ py::object Wp(const std::optional<map::Waypoint>& w) {
 }  // namespace
 
 PYBIND11_MODULE(_lockstep, m) {
+  python::RecordMainThread();
   python::AddEmbeddedCoordinator(m);
   m.doc() = "Lockstep's native client (C++ over DDS). Use lockstep.carla or lockstep.airsim.";
 
@@ -355,6 +357,9 @@ PYBIND11_MODULE(_lockstep, m) {
   py::register_exception_translator([](std::exception_ptr p) {
     try {
       if (p) std::rethrow_exception(p);
+    } catch (const Interrupted&) {
+      // A signal handler raised while the call waited (SignalRaised): its exception is set.
+      if (!PyErr_Occurred()) PyErr_SetNone(PyExc_KeyboardInterrupt);
     } catch (const CommandRejected& e) {
       py::object exc = py::reinterpret_borrow<py::object>(g_command_rejected)(e.what());
       exc.attr("reason") = e.reason();
@@ -455,7 +460,8 @@ PYBIND11_MODULE(_lockstep, m) {
              o.timeout_s = timeout;
              o.name = name;
              o.sensor_timeout_s = sensor_timeout;
-             py::gil_scoped_release release;
+             o.interrupted = &python::SignalRaised;
+             python::ReleaseGil release;
              return std::unique_ptr<Client, ReleaseGilDeleter>(new Client(o));
            }),
            py::arg("domain") = -1, py::arg("timeout") = 10.0, py::arg("name") = "", py::arg("sensor_timeout") = 10.0)
@@ -489,33 +495,36 @@ PYBIND11_MODULE(_lockstep, m) {
              d["members"] = members;
              return d;
            })
-      .def("wait_ready", &Client::wait_ready, py::arg("timeout") = 10.0, py::call_guard<py::gil_scoped_release>())
+      .def("close", &Client::close, py::call_guard<python::ReleaseGil>(),
+           "Stops the client: no more callbacks; waiting calls end with ClientError. lockstep closes every client at exit")
+      .def_property_readonly("closed", &Client::closed)
+      .def("wait_ready", &Client::wait_ready, py::arg("timeout") = 10.0, py::call_guard<python::ReleaseGil>())
       .def("run", &Client::run)
       .def("frame", &Client::frame)
       .def("apply_settings",
            [](Client& c, const py::dict& d) {
              const msg::WorldSettings s = python::SettingsFromDict(d, c.settings());
-             py::gil_scoped_release release;
+             python::ReleaseGil release;
              return c.apply_settings(s);
            })
       .def("set_weather",
            [](Client& c, const py::dict& d) {
              const msg::WeatherParameters w = python::WeatherFromDict(d, c.world_info().weather());
-             py::gil_scoped_release release;
+             python::ReleaseGil release;
              c.set_weather(w);
            })
-      .def("tick", &Client::tick, py::call_guard<py::gil_scoped_release>())
-      .def("wait_for_tick", &Client::wait_for_tick, py::arg("timeout") = -1.0, py::call_guard<py::gil_scoped_release>())
-      .def("reset", &Client::reset, py::arg("seed") = 0, py::call_guard<py::gil_scoped_release>())
+      .def("tick", &Client::tick, py::call_guard<python::ReleaseGil>())
+      .def("wait_for_tick", &Client::wait_for_tick, py::arg("timeout") = -1.0, py::call_guard<python::ReleaseGil>())
+      .def("reset", &Client::reset, py::arg("seed") = 0, py::call_guard<python::ReleaseGil>())
       .def("load_map", &Client::load_map, py::arg("name"), py::arg("opendrive") = "", py::arg("scene") = "",
-           py::call_guard<py::gil_scoped_release>())
+           py::call_guard<python::ReleaseGil>())
       .def(
           "submit",
           [](Client& c, const py::dict& d, bool throw_if_rejected, const std::string& watch) {
             msg::CommandBody b = python::CommandFromDict(d);
             msg::CommandReply r;
             {
-              py::gil_scoped_release release;
+              python::ReleaseGil release;
               r = watch.empty() ? c.Submit(std::move(b), throw_if_rejected) : c.SubmitWatched(std::move(b), watch);
             }
             return py::make_tuple(r.accepted(), r.reason().to_string(), r.actor(), r.frame());
@@ -538,7 +547,7 @@ PYBIND11_MODULE(_lockstep, m) {
              for (const auto& item : list) bodies.push_back(python::CommandFromDict(item.cast<py::dict>()));
              std::vector<msg::CommandReply> replies;
              {
-               py::gil_scoped_release release;
+               python::ReleaseGil release;
                replies = c.SubmitBatch(bodies);
              }
              py::list out;
@@ -551,17 +560,17 @@ PYBIND11_MODULE(_lockstep, m) {
              uint32_t parent) {
             const msg::Pose p = python::PoseFromTuple(pose);
             AttributeList list(attrs.begin(), attrs.end());
-            py::gil_scoped_release release;
+            python::ReleaseGil release;
             return c.spawn(bp, p, list, parent);
           },
           py::arg("blueprint"), py::arg("transform"), py::arg("attributes") = std::map<std::string, std::string>{},
           py::arg("parent") = 0)
-      .def("destroy", &Client::destroy, py::call_guard<py::gil_scoped_release>())
+      .def("destroy", &Client::destroy, py::call_guard<python::ReleaseGil>())
       .def("blueprints",
            [](const Client& c, double wait) {
              BlueprintLibrary lib;
              {
-               py::gil_scoped_release release;
+               python::ReleaseGil release;
                lib = c.blueprints(wait);
              }
              py::list out;
@@ -608,7 +617,7 @@ PYBIND11_MODULE(_lockstep, m) {
            [](Client& c) {
              std::shared_ptr<const map::Map> mp;
              {
-               py::gil_scoped_release release;
+               python::ReleaseGil release;
                mp = c.map();
              }
              return std::const_pointer_cast<map::Map>(mp);
@@ -617,10 +626,13 @@ PYBIND11_MODULE(_lockstep, m) {
            [](Client& c, uint32_t sensor, py::function cb) {
              // The callback runs on the client's dispatch thread: take the GIL only to call it.
              auto fn = std::shared_ptr<py::function>(new py::function(std::move(cb)), [](py::function* f) {
+               if (python::Finalizing() && !python::IsMainThread()) return;  // leaked: Python is going away
                py::gil_scoped_acquire gil;
                delete f;
              });
              c.listen(sensor, [fn](const SensorSample& s) {
+               if (python::Finalizing()) return;  // no Python code runs in other threads any more
+               python::CallbackScope in_callback;
                py::gil_scoped_acquire gil;
                try {
                  (*fn)(s);
@@ -629,7 +641,7 @@ PYBIND11_MODULE(_lockstep, m) {
                }
              });
            })
-      .def("stop", &Client::stop, py::call_guard<py::gil_scoped_release>())
+      .def("stop", &Client::stop, py::call_guard<python::ReleaseGil>())
       .def("is_listening", &Client::is_listening)
       .def("delivered", &Client::delivered)
       .def("drone_state",
@@ -650,14 +662,14 @@ PYBIND11_MODULE(_lockstep, m) {
            [](Client& c, const py::dict& d) {
              msg::CommandBody b = python::CommandFromDict(d);
              if (b._d() != msg::CommandKind::CMD_DRONE) throw py::value_error("send_drone needs a command of type 'drone'");
-             py::gil_scoped_release release;
+             python::ReleaseGil release;
              return c.send_drone(b.drone());
            })
       .def("wait_drone",
            [](Client& c, uint32_t actor, uint64_t id, double timeout) {
              msg::DroneCommandStatus s;
              {
-               py::gil_scoped_release release;
+               python::ReleaseGil release;
                s = c.wait_drone(actor, id, timeout);
              }
              return DroneStatusName(s);
@@ -677,11 +689,11 @@ PYBIND11_MODULE(_lockstep, m) {
   auto drive = [](int d) { return d == 1 ? NedDrivetrain::kForwardOnly : NedDrivetrain::kMaxDegreeOfFreedom; };
 
   py::class_<CommandFuture>(m, "CommandFuture")
-      .def("join", &CommandFuture::join, py::arg("timeout") = -1.0, py::call_guard<py::gil_scoped_release>())
+      .def("join", &CommandFuture::join, py::arg("timeout") = -1.0, py::call_guard<python::ReleaseGil>())
       .def("status", [](CommandFuture& f, double t) {
         msg::DroneCommandStatus s;
         {
-          py::gil_scoped_release release;
+          python::ReleaseGil release;
           s = f.status(t);
         }
         return DroneStatusName(s);
@@ -696,27 +708,27 @@ PYBIND11_MODULE(_lockstep, m) {
       .def("add_vehicle",
            [](MC& mc, const std::string& name, const std::string& bp, const py::object& pose) {
              const msg::Pose p = python::PoseFromTuple(pose);
-             py::gil_scoped_release release;
+             python::ReleaseGil release;
              return mc.addVehicle(name, bp, p);
            })
       .def("home", [](const MC& mc, const std::string& v) { return Vec(mc.homeEnu(v)); })
       .def("enable_api_control", &MC::enableApiControl)
       .def("is_api_control_enabled", &MC::isApiControlEnabled)
-      .def("arm_disarm", &MC::armDisarm, py::call_guard<py::gil_scoped_release>())
-      .def("takeoff", &MC::takeoffAsync, py::call_guard<py::gil_scoped_release>())
-      .def("land", &MC::landAsync, py::call_guard<py::gil_scoped_release>())
-      .def("go_home", &MC::goHomeAsync, py::call_guard<py::gil_scoped_release>())
-      .def("hover", &MC::hoverAsync, py::call_guard<py::gil_scoped_release>())
-      .def("cancel", &MC::cancelLastTask, py::call_guard<py::gil_scoped_release>())
+      .def("arm_disarm", &MC::armDisarm, py::call_guard<python::ReleaseGil>())
+      .def("takeoff", &MC::takeoffAsync, py::call_guard<python::ReleaseGil>())
+      .def("land", &MC::landAsync, py::call_guard<python::ReleaseGil>())
+      .def("go_home", &MC::goHomeAsync, py::call_guard<python::ReleaseGil>())
+      .def("hover", &MC::hoverAsync, py::call_guard<python::ReleaseGil>())
+      .def("cancel", &MC::cancelLastTask, py::call_guard<python::ReleaseGil>())
       .def("move_to_position",
            [=](MC& mc, double x, double y, double z, double v, double t, int d, bool is_rate, double yaw, double la,
                const std::string& name) {
-             py::gil_scoped_release release;
+             python::ReleaseGil release;
              return mc.moveToPositionAsync(x, y, z, v, t, drive(d), yawmode(is_rate, yaw), la, name);
            })
       .def("move_to_z",
            [=](MC& mc, double z, double v, double t, bool is_rate, double yaw, double la, const std::string& name) {
-             py::gil_scoped_release release;
+             python::ReleaseGil release;
              return mc.moveToZAsync(z, v, t, yawmode(is_rate, yaw), la, name);
            })
       .def("move_on_path",
@@ -724,34 +736,34 @@ PYBIND11_MODULE(_lockstep, m) {
                double yaw, double la, const std::string& name) {
              std::vector<Ned> p;
              for (const auto& [x, y, z] : path) p.push_back({x, y, z});
-             py::gil_scoped_release release;
+             python::ReleaseGil release;
              return mc.moveOnPathAsync(p, v, t, drive(d), yawmode(is_rate, yaw), la, name);
            })
       .def("move_by_velocity",
            [=](MC& mc, double vx, double vy, double vz, double dur, int d, bool is_rate, double yaw, bool body,
                const std::string& name) {
-             py::gil_scoped_release release;
+             python::ReleaseGil release;
              return body ? mc.moveByVelocityBodyFrameAsync(vx, vy, vz, dur, drive(d), yawmode(is_rate, yaw), name)
                          : mc.moveByVelocityAsync(vx, vy, vz, dur, drive(d), yawmode(is_rate, yaw), name);
            })
       .def("move_by_velocity_z",
            [=](MC& mc, double vx, double vy, double z, double dur, int d, bool is_rate, double yaw, const std::string& name) {
-             py::gil_scoped_release release;
+             python::ReleaseGil release;
              return mc.moveByVelocityZAsync(vx, vy, z, dur, drive(d), yawmode(is_rate, yaw), name);
            })
-      .def("rotate_to_yaw", &MC::rotateToYawAsync, py::call_guard<py::gil_scoped_release>())
-      .def("rotate_by_yaw_rate", &MC::rotateByYawRateAsync, py::call_guard<py::gil_scoped_release>())
-      .def("move_by_rpy_throttle", &MC::moveByRollPitchYawThrottleAsync, py::call_guard<py::gil_scoped_release>())
-      .def("move_by_rpy_z", &MC::moveByRollPitchYawZAsync, py::call_guard<py::gil_scoped_release>())
-      .def("move_by_angle_rates_throttle", &MC::moveByAngleRatesThrottleAsync, py::call_guard<py::gil_scoped_release>())
-      .def("move_by_motor_pwms", &MC::moveByMotorPWMsAsync, py::call_guard<py::gil_scoped_release>())
-      .def("move_by_rp_yawrate_throttle", &MC::moveByRollPitchYawrateThrottleAsync, py::call_guard<py::gil_scoped_release>())
-      .def("move_by_rp_yawrate_z", &MC::moveByRollPitchYawrateZAsync, py::call_guard<py::gil_scoped_release>())
-      .def("move_by_angle_rates_z", &MC::moveByAngleRatesZAsync, py::call_guard<py::gil_scoped_release>())
+      .def("rotate_to_yaw", &MC::rotateToYawAsync, py::call_guard<python::ReleaseGil>())
+      .def("rotate_by_yaw_rate", &MC::rotateByYawRateAsync, py::call_guard<python::ReleaseGil>())
+      .def("move_by_rpy_throttle", &MC::moveByRollPitchYawThrottleAsync, py::call_guard<python::ReleaseGil>())
+      .def("move_by_rpy_z", &MC::moveByRollPitchYawZAsync, py::call_guard<python::ReleaseGil>())
+      .def("move_by_angle_rates_throttle", &MC::moveByAngleRatesThrottleAsync, py::call_guard<python::ReleaseGil>())
+      .def("move_by_motor_pwms", &MC::moveByMotorPWMsAsync, py::call_guard<python::ReleaseGil>())
+      .def("move_by_rp_yawrate_throttle", &MC::moveByRollPitchYawrateThrottleAsync, py::call_guard<python::ReleaseGil>())
+      .def("move_by_rp_yawrate_z", &MC::moveByRollPitchYawrateZAsync, py::call_guard<python::ReleaseGil>())
+      .def("move_by_angle_rates_z", &MC::moveByAngleRatesZAsync, py::call_guard<python::ReleaseGil>())
       .def("move_to_gps",
            [=](MC& mc, double lat, double lon, double alt, double v, double t, int d, bool is_rate, double yaw, double la,
                double adaptive, const std::string& name) {
-             py::gil_scoped_release release;
+             python::ReleaseGil release;
              return mc.moveToGPSAsync(lat, lon, alt, v, t, drive(d), yawmode(is_rate, yaw), la, adaptive, name);
            })
       .def("set_gains",
@@ -766,12 +778,12 @@ PYBIND11_MODULE(_lockstep, m) {
              if (pids.size() != 3) throw py::value_error("set_gains: three PIDs (one per axis), got " + std::to_string(pids.size()));
              std::vector<MC::Pid> p;
              for (const auto& [kp, ki, kd] : pids) p.push_back({kp, ki, kd});
-             py::gil_scoped_release release;
+             python::ReleaseGil release;
              mc.setControllerGains(it->second, p[0], p[1], p[2], name);
            })
       .def("set_wind",
            [](MC& mc, std::tuple<double, double, double> w) {
-             py::gil_scoped_release release;
+             python::ReleaseGil release;
              mc.simSetWind({std::get<0>(w), std::get<1>(w), std::get<2>(w)});
            })
       .def("set_kinematics",
@@ -782,13 +794,13 @@ PYBIND11_MODULE(_lockstep, m) {
              k.orientation = {std::get<0>(q), std::get<1>(q), std::get<2>(q), std::get<3>(q)};
              k.linear_velocity = {std::get<0>(v), std::get<1>(v), std::get<2>(v)};
              k.angular_velocity = {std::get<0>(w), std::get<1>(w), std::get<2>(w)};
-             py::gil_scoped_release release;
+             python::ReleaseGil release;
              mc.simSetKinematics(k, name);
            })
       .def("track_target",
            [](MC& mc, std::tuple<double, double, double> p, std::tuple<double, double, double> v, double max_speed,
               double dur, const std::string& name) {
-             py::gil_scoped_release release;
+             python::ReleaseGil release;
              return mc.trackTargetAsync({std::get<0>(p), std::get<1>(p), std::get<2>(p)},
                                         {std::get<0>(v), std::get<1>(v), std::get<2>(v)}, max_speed, dur, name);
            })
@@ -821,11 +833,12 @@ PYBIND11_MODULE(_lockstep, m) {
            })
       .def("set_pose", [](MC& mc, std::tuple<double, double, double> p, std::tuple<double, double, double, double> q,
                           const std::string& name) {
-        py::gil_scoped_release release;
+        python::ReleaseGil release;
         mc.simSetVehiclePose({std::get<0>(p), std::get<1>(p), std::get<2>(p)},
                              {std::get<0>(q), std::get<1>(q), std::get<2>(q), std::get<3>(q)}, name);
       });
 
   m.def("default_domain", &DefaultDomain);
+  m.def("_prepare_exit", &python::PrepareExit, "lockstep's atexit hook: see gil.h");
   m.def("enu_yaw_from_ned_deg", &NedYawDegToEnu);
 }

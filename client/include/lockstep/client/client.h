@@ -56,6 +56,13 @@ class SensorLate : public ClientError {
   uint64_t frame_;
 };
 
+// A wait was stopped by ClientOptions::interrupted (the Python module: a signal such as
+// Ctrl-C arrived, and its handler raised).
+class Interrupted : public ClientError {
+ public:
+  using ClientError::ClientError;
+};
+
 struct ClientOptions {
   int domain = -1;               // DDS domain; -1 = $LOCKSTEP_DOMAIN, else 0
   double timeout_s = 10;         // s, to find the simulation and for each command reply
@@ -64,6 +71,10 @@ struct ClientOptions {
   double state_timeout_s = 2;    // s, how long tick() waits for the frame's ground / air state
   std::string name;              // unique client name; empty = "client-<host>-<pid>-<n>"
   Bus* bus = nullptr;            // an existing bus (tests: the in-process bus); null = a new DDS participant
+  // Polled about every 100 ms while a call waits, without the client's lock held: true ends
+  // the wait with Interrupted. The Python module checks for signals here, so Ctrl-C reaches a
+  // script blocked in tick(), wait_for_tick() or a drone command's join(). Empty: never.
+  std::function<bool()> interrupted;
 };
 
 // An actor of the current run: what its spawn said (from the ticks and our replies).
@@ -116,6 +127,13 @@ class Client {
   ~Client();
   Client(const Client&) = delete;
   Client& operator=(const Client&) = delete;
+
+  // Stops the client for good: no more callbacks (the dispatch thread is joined); every
+  // call waiting now, and every later call that would wait, throws
+  // ClientError("... closed"). Idempotent. The Python module closes its clients before the
+  // interpreter finalizes, so no client thread outlives it.
+  void close();
+  bool closed() const;
 
   int domain() const;
   const std::string& name() const;

@@ -185,3 +185,20 @@ def test_arm_without_api_control_returns_false_and_reset_returns_vehicles(client
     assert not client.isApiControlEnabled('Drone2')
     assert client.listVehicles() == ['Drone1', 'Drone2']   # the same vehicles: no new run
     assert _enu(client, 'Drone1')[0] == pytest.approx(before[0], abs=0.05)
+
+
+def test_a_move_that_cannot_complete_times_out_and_says_so(client, caplog, monkeypatch):
+    """A target under the ground: join() returns False at timeout_sec (AirSim's), and while it
+    waits the log says where the vehicle is stuck."""
+    import logging
+    from lockstep.airsim import client as client_module
+    monkeypatch.setattr(client_module._Future, '_REPORT_S', 0.2)
+    logger = logging.getLogger('lockstep.airsim')
+    logger.addHandler(caplog.handler)
+    try:
+        client.enableApiControl(True, 'Drone2')
+        f = client.moveToPositionAsync(0, 0, 5, 1, timeout_sec=20, vehicle_name='Drone2')   # 5 m down: in the ground
+        assert f.join() is False
+    finally:
+        logger.removeHandler(caplog.handler)
+    assert "moveToPositionAsync on vehicle 'Drone2' still running" in caplog.text

@@ -404,7 +404,17 @@ class _Shared:
         sx, sy, sz = self.start()
         x, y, z = geo.ned_to_enu_pos(ned, (sx, sy, sz + 0.2))
         if not self.free_at((x, y, z)):
-            raise lockstep.ClientError("vehicle '%s': its start (%.1f, %.1f, %.1f) overlaps an actor" % (name, x, y, z))
+            # As Unreal's AdjustIfPossibleButAlwaysSpawn (AirSim's pawns): the nearest free place nearby.
+            for r in (2.0, 4.0, 6.0, 8.0):
+                spots = [(x + r * math.cos(k * math.pi / 4), y + r * math.sin(k * math.pi / 4), z) for k in range(8)]
+                free = [p for p in spots if self.free_at(p)]
+                if free:
+                    log.warning("airsim: vehicle '%s': its start overlaps an actor; placed %.0f m away", name, r)
+                    x, y, z = free[0]
+                    break
+            else:
+                raise lockstep.ClientError("vehicle '%s': its start (%.1f, %.1f, %.1f) and 8 m around it are taken"
+                                           % (name, x, y, z))
         q = geo.ned_to_enu_quat(geo.frd_euler_deg_to_quat(*rpy_deg))
         return self.mc.add_vehicle(name, 'drone.generic_quad', (x, y, z) + tuple(q))
 

@@ -12,11 +12,11 @@ from .actors import ActorList, make_actor, state_transform
 from .blueprints import BlueprintLibrary
 from .constants import WEATHER_FIELDS, WEATHER_PRESETS
 from .errors import unsupported
-from .geometry import Location, Transform, Vector3D, from_enu_vector, shift_up, to_enu_vector, to_wire_pose
+from .geometry import Color, Location, Transform, Vector3D, from_enu_vector, shift_up, to_enu_vector, to_wire_pose
 from .map import Map
 
 __all__ = ['Client', 'World', 'WorldSettings', 'WeatherParameters', 'TrafficManager', 'WorldSnapshot', 'ActorSnapshot',
-           'Timestamp', 'maps_path', 'OpendriveGenerationParameters']
+           'Timestamp', 'maps_path', 'DebugHelper', 'OpendriveGenerationParameters']
 
 
 class OpendriveGenerationParameters:
@@ -705,19 +705,70 @@ class World:
 
     @property
     def debug(self):
-        return _Debug()
+        return DebugHelper(self)
 
     def __repr__(self):
         return 'World(id=%d)' % self.id
 
 
-class _Debug:
-    """carla.DebugHelper draws in the Unreal viewport; Lockstep has none."""
+class DebugHelper:
+    """carla.DebugHelper (world.debug). Each call is a debug_draw command; the render service
+    draws points, lines, arrows and boxes into its colour cameras from the frame of the next
+    tick, for life_time seconds of simulation time (<= 0: until the world is reloaded, as
+    CARLA's persistent line batcher keeps them). Strings and the draw_hud_* shapes go, as in
+    CARLA, to the spectator's HUD, which no camera sensor sees. Without a render service the
+    calls draw nothing and send nothing."""
 
-    def __getattr__(self, name):
-        def fail(*args, **kwargs):
-            unsupported('DebugHelper.' + name, 'there is no viewport to draw in')
-        return fail
+    def __init__(self, world):
+        self._world = world
+
+    def _send(self, kind, color, life_time, persistent_lines, **shape):
+        st = self._world._client.run_status()
+        if st is None or not any(k == 'render' and alive for _, k, alive, _ in st['members']):
+            return None
+        c = color if color is not None else Color(255, 0, 0)
+        shape.update(kind=kind, color=(int(c.r), int(c.g), int(c.b), int(getattr(c, 'a', 255))),
+                     life_time=float(life_time), persistent_lines=bool(persistent_lines))
+        self._world._client.submit({'type': 'debug_draw', 'shapes': [shape]})
+        return None
+
+    def draw_point(self, location, size=0.1, color=None, life_time=-1.0, persistent_lines=True):
+        return self._send('point', color, life_time, persistent_lines, begin=to_enu_vector(location), size=float(size))
+
+    def draw_hud_point(self, location, size=0.1, color=None, life_time=-1.0, persistent_lines=True):
+        return self._send('point', color, life_time, persistent_lines, hud=True, begin=to_enu_vector(location),
+                          size=float(size))
+
+    def draw_line(self, begin, end, thickness=0.1, color=None, life_time=-1.0, persistent_lines=True):
+        return self._send('line', color, life_time, persistent_lines, begin=to_enu_vector(begin), end=to_enu_vector(end),
+                          size=float(thickness))
+
+    def draw_hud_line(self, begin, end, thickness=0.1, color=None, life_time=-1.0, persistent_lines=True):
+        return self._send('line', color, life_time, persistent_lines, hud=True, begin=to_enu_vector(begin),
+                          end=to_enu_vector(end), size=float(thickness))
+
+    def draw_arrow(self, begin, end, thickness=0.1, arrow_size=0.1, color=None, life_time=-1.0, persistent_lines=True):
+        return self._send('arrow', color, life_time, persistent_lines, begin=to_enu_vector(begin), end=to_enu_vector(end),
+                          size=float(thickness), arrow_size=float(arrow_size))
+
+    def draw_hud_arrow(self, begin, end, thickness=0.1, arrow_size=0.1, color=None, life_time=-1.0, persistent_lines=True):
+        return self._send('arrow', color, life_time, persistent_lines, hud=True, begin=to_enu_vector(begin),
+                          end=to_enu_vector(end), size=float(thickness), arrow_size=float(arrow_size))
+
+    def _box(self, box, rotation, hud, thickness, color, life_time, persistent_lines):
+        pose = to_wire_pose(Transform(box.location, rotation))
+        return self._send('box', color, life_time, persistent_lines, hud=hud, begin=pose[:3], rotation=pose[3:],
+                          extent=(abs(box.extent.x), abs(box.extent.y), abs(box.extent.z)), size=float(thickness))
+
+    def draw_box(self, box, rotation, thickness=0.1, color=None, life_time=-1.0, persistent_lines=True):
+        return self._box(box, rotation, False, thickness, color, life_time, persistent_lines)
+
+    def draw_hud_box(self, box, rotation, thickness=0.1, color=None, life_time=-1.0, persistent_lines=True):
+        return self._box(box, rotation, True, thickness, color, life_time, persistent_lines)
+
+    def draw_string(self, location, text, draw_shadow=False, color=None, life_time=-1.0, persistent_lines=True):
+        return self._send('string', color, life_time, persistent_lines, begin=to_enu_vector(location), text=str(text)[:256],
+                          draw_shadow=bool(draw_shadow))
 
 
 class TrafficManager:
@@ -810,7 +861,10 @@ class TrafficManager:
         self._set('set_route', 0, actor, 'set_route', route=[str(r) for r in path])
 
     def update_vehicle_lights(self, actor, do_update):
-        unsupported('TrafficManager.update_vehicle_lights', 'vehicle lights are not simulated')
+        """While it drives the vehicle, the TM sets its position lights and low beams from the
+        sun, heavy rain and fog, fog lights in fog, and brake lights on a hard brake (CARLA's
+        light stage)."""
+        self._set('update_vehicle_lights', 1 if do_update else 0, actor, 'update_vehicle_lights')
 
     def shut_down(self):
         return None

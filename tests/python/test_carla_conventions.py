@@ -223,6 +223,10 @@ def test_image_convert_rewrites_raw_data_with_carlas_formulas(tmp_path):
     assert bytes(im.raw_data) == bytes(np.array(px, dtype=np.uint8).reshape(-1))
     with pytest.raises(ValueError, match='color converter'):
         im.convert(7)
+    # A one-channel image (gray8) reads as gray BGRA pixels.
+    g = FakeSample('image', {'transform': POSE, 'width': 2, 'height': 1, 'fov': 1.0, 'encoding': 'gray8'},
+                   np.array([[7, 200]], dtype=np.uint8))
+    assert list(sd.make_sensor_data(g, None)) == [carla.Color(7, 7, 7, 255), carla.Color(200, 200, 200, 255)]
 
 
 def _read_png(path):

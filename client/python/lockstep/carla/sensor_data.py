@@ -162,6 +162,8 @@ class Image(SensorData):
 
     def _bgra(self):
         a = self.to_numpy()
+        if a.ndim == 2 and a.dtype == np.uint8:  # gray8: gray BGRA
+            return _gray_to_bgra(a)
         if a.ndim == 2:  # depth_f32 (metres): CARLA's 24-bit encoding of metres / 1000
             n = np.clip(np.asarray(a, dtype=np.float64) / 1000.0, 0.0, 1.0)
             v = np.round(n * (256 ** 3 - 1)).astype(np.int64)

@@ -522,3 +522,38 @@ def test_int_attributes_are_read_as_carla_reads_them_with_atoi():
     assert bp.spawn_attributes()['channels'] == '64'  # what the sensors service is sent
     with pytest.raises(ValueError, match='channels'):
         bp.set_attribute('channels', 'many')
+
+
+@pytest.mark.skipif(not has_service('render'), reason='the render service is not built')
+def test_listen_to_gbuffer_delivers_the_render_passes_and_black_for_the_rest(world):
+    bp = world.get_blueprint_library().find('sensor.camera.rgb')
+    bp.set_attribute('image_size_x', '64')
+    bp.set_attribute('image_size_y', '48')
+    cam = world.spawn_actor(bp, carla.Transform(carla.Location(60.0, -1.75, 2.0)))
+    got = {}
+    ids = [carla.GBufferTextureID.SceneColor, carla.GBufferTextureID.SceneDepth, carla.GBufferTextureID.GBufferA,
+           carla.GBufferTextureID.Velocity, carla.GBufferTextureID.GBufferB]
+    try:
+        cam.enable_gbuffers(True)
+        for t in ids:
+            cam.listen_to_gbuffer(t, lambda image, t=t: got.setdefault(t, []).append(image))
+        assert cam.is_listening_gbuffer(carla.GBufferTextureID.SceneDepth)
+        for _ in range(4):
+            world.tick()
+        for t in ids:
+            assert got.get(t), 'texture %d: nothing' % t
+            im = got[t][-1]
+            assert isinstance(im, carla.Image) and (im.width, im.height) == (64, 48)
+            assert len(im.raw_data) == 64 * 48 * 4
+        depth = np.frombuffer(got[carla.GBufferTextureID.SceneDepth][-1].raw_data, dtype=np.uint8).reshape(48, 64, 4)
+        assert depth[..., :3].any()  # CARLA's depth encoding of the scene
+        black = np.frombuffer(got[carla.GBufferTextureID.GBufferB][-1].raw_data, dtype=np.uint8).reshape(48, 64, 4)
+        assert not black[..., :3].any()
+        cam.stop_gbuffer(carla.GBufferTextureID.SceneDepth)
+        assert not cam.is_listening_gbuffer(carla.GBufferTextureID.SceneDepth)
+        with pytest.raises(ValueError, match='G-buffer'):
+            cam.listen_to_gbuffer(13, print)
+    finally:
+        cam.destroy()
+    world.tick()
+    assert not [a for a in world.get_actors() if a.attributes.get('role_name', '').startswith('_gbuffer_')]

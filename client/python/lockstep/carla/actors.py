@@ -713,7 +713,28 @@ class Sensor(Actor):
     def is_listening(self):
         return self._world._client.is_listening(self.id)
 
+    # --- G-buffers: companion cameras of the render service's passes (gbuffer.py) ---
+    def listen_to_gbuffer(self, gbuffer_id, callback):
+        from .gbuffer import GBuffers
+        if getattr(self, '_gbuffers', None) is None:
+            self._gbuffers = GBuffers(self)
+        self._gbuffers.listen(gbuffer_id, callback)
+
+    def stop_gbuffer(self, gbuffer_id):
+        if getattr(self, '_gbuffers', None) is not None:
+            self._gbuffers.stop(gbuffer_id)
+
+    def is_listening_gbuffer(self, gbuffer_id):
+        return getattr(self, '_gbuffers', None) is not None and self._gbuffers.is_listening(gbuffer_id)
+
+    def enable_gbuffers(self, enabled=True):
+        """CARLA renders the G-buffers only when asked; here each texture's pass is made on
+        its first listen_to_gbuffer, so this only records the wish."""
+        self._gbuffers_enabled = bool(enabled)
+
     def destroy(self):
+        if getattr(self, '_gbuffers', None) is not None:
+            self._gbuffers.close()
         if self._callback is not None or self.is_listening:
             try:
                 self.stop()

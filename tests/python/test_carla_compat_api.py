@@ -119,6 +119,8 @@ def test_traffic_manager_calls_of_carla_exist():
                        ('set_boundaries_respawn_dormant_vehicles', (25.0, 70.0))):
         with pytest.raises(carla.LockstepUnsupported, match=r'TrafficManager\.%s is not supported' % name):
             getattr(tm, name)(*args)
+    sensor = carla.Sensor.__new__(carla.Sensor)
+    sensor.enable_gbuffers(True)  # tutorial_gbuffer.py: implemented (gbuffer.py, python.carla_conventions)
     # A fallback never replaces an implementation.
     from lockstep.carla.errors import add_unsupported
 
@@ -234,6 +236,27 @@ def test_destroy_of_an_actor_already_gone_warns_and_returns_false(world, capfd):
         assert child.destroy() is False  # destroyed with its parent (Lockstep; CARLA detaches it)
     err = capfd.readouterr().err
     assert 'WARNING: attempting to destroy an actor that is already dead: Actor %d (vehicle.audi.tt)' % car.id in err
+
+
+@ground
+def test_destroy_frees_the_place_at_once_while_free_running(world):
+    """vehicle_gallery.py: destroy, then spawn the next car at the same place."""
+    bp = world.get_blueprint_library().find('vehicle.audi.tt')
+    car, spawn = _free_spawn(world, bp, start=9)
+    for _ in range(5):
+        world.tick()
+    s = world.get_settings()
+    s.synchronous_mode = False
+    world.apply_settings(s)
+    try:
+        world.wait_for_tick()
+        world.wait_for_tick()
+        assert car.destroy()
+        again = world.spawn_actor(bp, spawn)  # CommandRejected (collision with the destroyed car) before
+        assert again.destroy()
+    finally:
+        s.synchronous_mode = True
+        world.apply_settings(s)
 
 
 @ground

@@ -323,7 +323,23 @@ class Actor:
                 raise
             return self._already_dead()
         self._destroyed = True
+        self._wait_gone()
         return True
+
+    def _wait_gone(self):
+        """CARLA's destroy returns once the actor is gone from the world. Free-running, wait
+        (a few frames at most) for the first state without it, so a spawn at its place that
+        follows is not refused as a collision with it (vehicle_gallery.py)."""
+        client = self._world._client
+        if client.state(self.id) is None or client.world_info()['settings']['synchronous_mode']:
+            return
+        for _ in range(10):
+            try:
+                client.wait_for_tick(1.0)
+            except lockstep.ClientError:
+                return
+            if client.state(self.id) is None:
+                return
 
     def _already_dead(self):
         self._destroyed = True

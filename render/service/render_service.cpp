@@ -2,6 +2,7 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstring>
@@ -251,6 +252,18 @@ void RenderService::LoadTown(const msg::WorldInfo& world) {
                                                  : map::SceneFromYaml(data->scene(), data->name().to_string() + ".scene.yaml");
   const auto meshes = map::BuildWorldMeshes(town, scene);
   renderer_->SetStaticScene(meshes, render::StreetLamps(scene));
+  // The cosmos camera's lines of the map (CARLA's CosmosControlSensor: lane routes outside
+  // junctions, 20 cm, blue; crosswalk outlines, orange).
+  cosmos_map_ = render::DebugDrawList{};
+  for (const auto& w : town.GenerateWaypoints(2.0)) {
+    if (w.IsJunction()) continue;
+    for (const auto& n : town.Next(w, 2.0)) {
+      if (!n.IsJunction()) cosmos_map_.lines.push_back({w.transform.location, n.transform.location, 0.2, {71, 134, 183}});
+    }
+  }
+  for (const auto& zone : town.Crosswalks()) {
+    for (std::size_t i = 1; i < zone.size(); ++i) cosmos_map_.lines.push_back({zone[i - 1], zone[i], 0.2, {202, 132, 58}});
+  }
   light_heads_.clear();
   for (const auto& p : scene.props) {
     if (p.kind == "traffic_light" && !p.ref.empty()) light_heads_[p.ref] = {p.height > 0 ? p.height : 3.0, p.yaw};
@@ -293,6 +306,22 @@ void RenderService::BeginRun(const msg::WorldInfo& world) {
   cameras_.clear();
   previous_poses_.clear();
   debug_.Clear();  // a new world: CARLA's persistent lines go with the old one
+}
+
+// CARLA's CosmosControlSensor: each vehicle's box red, each walker's green, traffic light
+// heads grey-green (10 cm lines), over the map's lanes and crosswalks.
+render::DebugDrawList RenderService::CosmosLines(const msg::GroundState* ground, const render::WorldView& world) const {
+  render::DebugDrawList out = cosmos_map_;
+  if (ground) {
+    for (const auto& v : ground->vehicles()) out.AddBox(ToPose(v.transform()), ToVec(v.half_extents()), 0.1, {255, 0, 0});
+    for (const auto& w : ground->walkers()) out.AddBox(ToPose(w.transform()), ToVec(w.half_extents()), 0.1, {0, 255, 0});
+  }
+  for (const auto& t : world.traffic_lights) {
+    render::Pose head = t.pose;
+    head.position += head.orientation * render::Vec3(0.18, 0, t.height + 0.42);
+    out.AddBox(head, render::Vec3(0.05, 0.2, 0.5), 0.1, {109, 144, 136});
+  }
+  return out;
 }
 
 // world.debug shapes of a tick issued at `issued` (the frame before it, when the client
@@ -541,6 +570,9 @@ void RenderService::Step(const msg::Tick& tick) {
   std::map<uint32_t, render::Pose> poses, mounts;
   render::WorldView world = BuildWorld(ground ? &*ground : nullptr, air ? &*air : nullptr, stamp.sim_time(), &poses, &mounts);
   world.debug = debug_.Visible(k, stamp.sim_time());
+  if (std::any_of(cameras_.begin(), cameras_.end(), [](const auto& c) { return c.second->settings.camera.lines_only; })) {
+    world.cosmos = CosmosLines(ground ? &*ground : nullptr, world);
+  }
   // Cameras due now, grouped: cameras with one pose and one lens share a pass.
   struct Pass {
     render::Camera camera;

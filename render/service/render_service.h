@@ -57,6 +57,7 @@ class RenderService final : public ServiceCore {
 
   void Apply(const msg::Command& c, const msg::FrameStamp& stamp);
   void AddDebugShapes(const msg::DebugDraw& d, uint64_t first_frame, double issued);
+  render::DebugDrawList CosmosLines(const msg::GroundState* ground, const render::WorldView& world) const;
   void LoadTown(const msg::WorldInfo& world);
   bool Mine(const msg::SpawnActor& s) const;
   void Fail(const msg::FrameStamp& stamp, uint32_t actor, const std::string& why);
@@ -90,6 +91,7 @@ class RenderService final : public ServiceCore {
   std::map<uint32_t, std::unique_ptr<CameraRecord>> cameras_;  // the cameras this process owns
   std::map<uint32_t, render::Pose> previous_poses_;         // actor poses of the last rendered frame
   render::DebugShapes debug_;                               // world.debug shapes of the run
+  render::DebugDrawList cosmos_map_;                        // the map's lines for cosmos cameras
   Reader<msg::MapData> map_reader_;  // last: its callback uses the members above
 };
 

@@ -88,6 +88,8 @@ const std::vector<CameraBlueprintSpec>& CameraBlueprints() {
        With(Rgb(), {F("positive_threshold", 0.3, 0.001, 10), F("negative_threshold", 0.3, 0.001, 10),
                     F("sigma_positive_threshold", 0, 0, 10), F("sigma_negative_threshold", 0, 0, 10),
                     I("refractory_period_ns", 0, 0, 1e12), B("use_log", true), F("log_eps", 0.001, 1e-9, 1)})},
+      // CARLA 0.9.16's Cosmos control visualization: the scene's boxes and lines on black.
+      {"sensor.camera.cosmos_visualization", ImageKind::kRgb, Basic()},
       {"sensor.camera.airsim", ImageKind::kAirSimScene,
        With(Rgb(), {S("image_type", "Scene",
                       {"Scene", "DepthPlanar", "DepthPerspective", "DepthVis", "DisparityNormalized", "Segmentation",
@@ -182,6 +184,7 @@ CameraSettings ParseCamera(const std::string& blueprint, const std::map<std::str
   if (blueprint == "sensor.camera.depth" && choice("encoding") == "float") s.kind = ImageKind::kDepthFloat;
   if (blueprint == "sensor.camera.semantic_segmentation") s.paper_classes = choice("classes") == "paper";
   if (blueprint == "sensor.camera.airsim") s.kind = AirSimImageKind(choice("image_type"));
+  s.camera.lines_only = blueprint == "sensor.camera.cosmos_visualization";
   if (s.kind == ImageKind::kDvs) {
     s.dvs.positive_threshold = number("positive_threshold");
     s.dvs.negative_threshold = number("negative_threshold");

@@ -460,6 +460,18 @@ struct Renderer::Impl {
     Target& t = TargetFor(cam.width, cam.height);
     glBindFramebuffer(GL_FRAMEBUFFER, t.fbo);
     glViewport(0, 0, cam.width, cam.height);
+    if (cam.lines_only) {
+      // CARLA's CosmosControlSensor shows only the line batchers, unlit, on black.
+      SetDrawBuffers(cam.outputs);
+      glDepthMask(GL_TRUE);
+      glClearColor(0, 0, 0, 1);
+      glClear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+      DebugDrawList lines = world.cosmos;
+      lines.lines.insert(lines.lines.end(), world.debug.lines.begin(), world.debug.lines.end());
+      lines.points.insert(lines.points.end(), world.debug.points.begin(), world.debug.points.end());
+      if (cam.outputs & kOutColor) DrawDebug(cam, lines);
+      return;
+    }
     glEnable(GL_DEPTH_TEST);
     glDepthFunc(GL_LEQUAL);
     glDepthMask(GL_TRUE);

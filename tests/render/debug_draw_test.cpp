@@ -3,6 +3,7 @@
 // hides what is behind it, labels and depth stay the scene's; and the shapes' life time.
 #include <gtest/gtest.h>
 
+#include "lockstep/render/camera_config.h"
 #include "lockstep/render/debug_draw.h"
 #include "render_fixture.h"
 
@@ -122,6 +123,44 @@ TEST(DebugDraw, ShapesLiveForTheirLifeTimeInSimulationSeconds) {
   EXPECT_EQ(s.size(), 1u) << "ended shapes are forgotten";
   s.Clear();
   EXPECT_EQ(s.Visible(10001, 10001 * dt).lines.size(), 0u);
+}
+
+}  // namespace
+}  // namespace lockstep::render
+
+namespace lockstep::render {
+namespace {
+
+using namespace testing;
+
+// CARLA 0.9.16's sensor.camera.cosmos_visualization: no scene, only the lines on black.
+TEST(CosmosVisualization, ShowsOnlyItsLinesOnBlack) {
+  const CameraSettings s = ParseCamera("sensor.camera.cosmos_visualization", {{"image_size_x", "160"}, {"image_size_y", "120"}});
+  ASSERT_TRUE(s.camera.lines_only);
+  EXPECT_TRUE(IsCameraBlueprint("sensor.camera.cosmos_visualization"));
+  Renderer& r = SharedRenderer();
+  Camera cam = s.camera;
+  cam.pose = At(0, 0, 2.0);
+  WorldView w;
+  w.weather.sun_altitude_angle = 60;
+  w.actors.push_back(Vehicle(r, 10, At(20, 0, 0.75)));  // the scene: not drawn
+  const CameraFrame empty = r.RenderFrames({cam}, w)[0];
+  for (std::size_t i = 0; i < empty.color.size(); i += 4) {
+    ASSERT_EQ(empty.color[i] | empty.color[i + 1] | empty.color[i + 2], 0) << "black without lines";
+  }
+  w.cosmos.AddBox(At(20, 0, 0.75), Vec3(2.3, 1.0, 0.75), 0.1, {255, 0, 0});
+  w.debug.points.push_back({Vec3(15, 3, 2), 0.1, {0, 0, 255}});
+  const CameraFrame f = r.RenderFrames({cam}, w)[0];
+  int red = 0, blue = 0, other = 0;
+  for (std::size_t i = 0; i < f.color.size(); i += 4) {
+    const int b = f.color[i], g = f.color[i + 1], rr = f.color[i + 2];
+    if (rr == 255 && g == 0 && b == 0) ++red;
+    else if (b == 255 && g == 0 && rr == 0) ++blue;
+    else if (b | g | rr) ++other;
+  }
+  EXPECT_GT(red, 40) << "the box's edges";
+  EXPECT_EQ(blue, 100) << "the world's debug point, 10 x 10 px";
+  EXPECT_EQ(other, 0) << "nothing of the scene";
 }
 
 }  // namespace

@@ -44,6 +44,9 @@ struct Camera {
   double motion_blur_max_distortion = 0.35;
   double motion_blur_min_object_screen_size = 0.1;
   std::uint64_t noise_seed = 0;         // seeds rain streaks: run seed ^ sensor id
+  // CARLA 0.9.16's sensor.camera.cosmos_visualization: no scene, only lines on black (the
+  // world's debug shapes and WorldView::cosmos), unlit.
+  bool lines_only = false;
 
   double Focal() const;  // px
   bool HasLensDistortion() const;  // lens_circle_multiplier > 0 and lens_k or lens_kcube not 0

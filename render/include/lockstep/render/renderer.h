@@ -59,6 +59,9 @@ struct WorldView {
   std::vector<ActorDraw> actors;
   std::vector<TrafficLightDraw> traffic_lights;
   DebugDrawList debug;  // world.debug shapes: drawn into the colour output only
+  // What a cosmos_visualization camera (Camera::lines_only) draws besides `debug`: the actors'
+  // boxes, traffic light heads, lanes and crosswalks (CARLA's CosmosControlSensor colours).
+  DebugDrawList cosmos;
 };
 
 // Read-back outputs of one camera. Pointers are valid only during the sink call; those

@@ -372,3 +372,19 @@ def test_a_client_that_joins_later_sees_the_actors_blueprints_and_attributes(wor
         for a in spawned:
             a.destroy()
         world.tick()
+
+
+def test_get_actors_of_ids_keeps_the_order_asked_for(world):
+    # CARLA's World.get_actors(ids) answers in the order of the ids (its cached actor list);
+    # generate_traffic.py pairs each walker controller with its walker by that order.
+    lib = world.get_blueprint_library()
+    drones = []
+    for i in range(3):
+        bp = lib.find('drone.generic_quad')
+        bp.set_attribute('role_name', 'order%d' % i)
+        drones.append(world.spawn_actor(bp, carla.Transform(carla.Location(60.0 + 4 * i, -30.0, 5.0))))
+    world.tick()
+    ids = [drones[2].id, drones[0].id, 987654, drones[1].id]
+    assert [a.id for a in world.get_actors(ids)] == [drones[2].id, drones[0].id, drones[1].id]
+    for d in drones:
+        d.destroy()

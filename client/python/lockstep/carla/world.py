@@ -509,6 +509,8 @@ class World:
                 try:
                     self._client.wait_for_tick(1.0)
                 except lockstep.ClientError:
+                    if self._client.closed:  # the process is exiting
+                        return
                     continue
                 if not stop.is_set():
                     callback(WorldSnapshot(self))
@@ -586,8 +588,10 @@ class World:
     def get_actors(self, actor_ids=None):
         infos = self._client.actors()
         if actor_ids is not None:
-            wanted = set(actor_ids)
-            infos = [i for i in infos if i['id'] in wanted]
+            # As CARLA's cached actor list: in the order asked for (generate_traffic.py pairs
+            # each walker controller with its walker by position), unknown ids left out.
+            by_id = {i['id']: i for i in infos}
+            infos = [by_id[a] for a in actor_ids if a in by_id]
         return ActorList(self._wrap(i) for i in infos)
 
     def _spawn_dict(self, blueprint, transform, attach_to):

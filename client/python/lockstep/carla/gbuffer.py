@@ -2,8 +2,12 @@
 service's passes. Each texture the render service has a pass for comes from a companion
 camera of that pass (same mount, image size and field of view) that the module spawns on
 the first listen and destroys with the camera or on stop_gbuffer; the textures it has no
-pass for arrive black, as CARLA sends the textures a scene does not fill."""
+pass for arrive black, as CARLA sends the textures a scene does not fill. As CARLA's,
+listen_to_gbuffer returns at once: the companion is spawned on a thread of its own."""
+import sys
 import threading
+
+import lockstep
 
 import numpy as np
 
@@ -65,7 +69,9 @@ class GBuffers:
         self._sensor = sensor
         self._lock = threading.Lock()
         self._callbacks = {}   # texture id -> callback
-        self._companions = {}  # blueprint id -> companion actor id
+        self._companions = {}  # pass key -> companion actor id
+        self._pending = set()  # pass keys whose companion is being spawned
+        self._closed = False
 
     def _size(self):
         a = self._sensor.attributes
@@ -88,8 +94,44 @@ class GBuffers:
         parent = info.get('parent', 0)
         if not parent:
             mount = self._sensor._wire_pose()
-        attrs['role_name'] = '_gbuffer_%d' % self._sensor.id
+        attrs['role_name'] = self._role(blueprint, tiny)
         return world._client.spawn(blueprint, mount, attrs, parent)
+
+    def _role(self, blueprint, tiny):
+        return '_gbuffer_%d_%s%s' % (self._sensor.id, blueprint.split('.')[-1], '_black' if tiny else '')
+
+    def _start(self, key):
+        """Spawns the pass's companion (a late reply of a busy simulation is looked up by its
+        role name), then listens to it, unless the textures were stopped meanwhile."""
+        blueprint, tiny = key.split('#')[0], key.endswith('#black')
+        client = self._sensor._world._client
+        actor, why = None, ''
+        for _ in range(3):
+            try:
+                actor = self._spawn(blueprint, tiny)
+                break
+            except lockstep.CommandRejected as e:
+                why = str(e)
+                break
+            except lockstep.ClientError as e:
+                why = str(e)
+                role = self._role(blueprint, tiny)
+                found = [i['id'] for i in client.actors() if i.get('attributes', {}).get('role_name') == role]
+                if found:
+                    actor = found[0]
+                    break
+        with self._lock:
+            self._pending.discard(key)
+            keep = actor is not None and not self._closed and key in {_PASSES.get(t, _BLACK) for t in self._callbacks}
+            if keep:
+                self._companions[key] = actor
+        if actor is None:
+            sys.stderr.write('WARNING: listen_to_gbuffer: the %s pass of camera %d could not start: %s\n'
+                             % (blueprint, self._sensor.id, why))
+        elif not keep:
+            self._drop([actor])
+        else:
+            client.listen(actor, lambda s, k=key: self._deliver(k, s))
 
     def _deliver(self, key, sample):
         data = make_sensor_data(sample, self._sensor._world)
@@ -113,13 +155,11 @@ class GBuffers:
         key = _PASSES.get(texture, _BLACK)
         with self._lock:
             self._callbacks[texture] = callback
-            new = key not in self._companions
+            new = key not in self._companions and key not in self._pending
+            if new:
+                self._pending.add(key)
         if new:
-            blueprint = key.split('#')[0]
-            actor = self._spawn(blueprint, tiny=key.endswith('#black'))
-            with self._lock:
-                self._companions[key] = actor
-            self._sensor._world._client.listen(actor, lambda s, k=key: self._deliver(k, s))
+            threading.Thread(target=self._start, args=(key,), name='gbuffer-%d' % self._sensor.id, daemon=True).start()
 
     def stop(self, texture):
         texture = int(texture)
@@ -137,6 +177,7 @@ class GBuffers:
 
     def close(self):
         with self._lock:
+            self._closed = True
             actors = list(self._companions.values())
             self._companions.clear()
             self._callbacks.clear()

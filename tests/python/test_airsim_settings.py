@@ -201,4 +201,4 @@ def test_a_move_that_cannot_complete_times_out_and_says_so(client, caplog, monke
         assert f.join() is False
     finally:
         logger.removeHandler(caplog.handler)
-    assert "moveToPositionAsync on vehicle 'Drone2' still running" in caplog.text
+    assert "moveToPositionAsync on vehicle 'Drone2' still running" in caplog.text and 'not getting anywhere' in caplog.text

@@ -58,8 +58,9 @@ class _Future:
     """What AirSim's *Async calls return. join() blocks until air_sim reports the command
     finished: True when it completed, False when it timed out or was cancelled (AirSim's
     bool); a rejected command raises CommandRejected with air_sim's reason. While it
-    waits, every 10 s of wall time without progress it logs what the vehicle is doing, so a
-    command that cannot complete (a target the drone cannot reach) is visible."""
+    waits, it looks at the vehicle every 10 s of wall time and logs where it is when it has not
+    moved 0.5 m since the last look, so a command that cannot complete (a target the drone
+    cannot reach) is visible."""
 
     _REPORT_S = 10.0
 
@@ -87,15 +88,19 @@ class _Future:
         return self._result
 
     def _report(self, waited):
+        """A log line when the vehicle moved less than 0.5 m since the last look: it is stuck."""
         try:
             s = self._shared.mc.state(self._name)
             p, v = s['position'], s['linear_velocity']
+            last, self._last_seen = getattr(self, '_last_seen', None), p
+            if last is None or sum((a - b) ** 2 for a, b in zip(p, last)) >= 0.25:
+                return
             c = s['collision']
             what = 'at (%.1f, %.1f, %.1f) m NED, %.2f m/s' % (p[0], p[1], p[2], math.sqrt(sum(x * x for x in v)))
             if c[0] or c[6]:
                 what += ', last contact with %s' % (c[6] or 'something')
-            log.warning("airsim: %s on vehicle '%s' still running after %.0f s (%s); AirSim's timeout_sec bounds it",
-                        self._call, self._name, waited, what)
+            log.warning("airsim: %s on vehicle '%s' still running after %.0f s and not getting anywhere (%s); "
+                        "AirSim's timeout_sec bounds it", self._call, self._name or 'default', waited, what)
         except Exception:  # noqa: BLE001 - a report must never break the wait
             pass
 

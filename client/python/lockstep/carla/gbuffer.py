@@ -116,7 +116,10 @@ class GBuffers:
             except lockstep.ClientError as e:
                 why = str(e)
                 role = self._role(blueprint, tiny)
-                found = [i['id'] for i in client.actors() if i.get('attributes', {}).get('role_name') == role]
+                try:
+                    found = [i['id'] for i in client.actors() if i.get('attributes', {}).get('role_name') == role]
+                except lockstep.ClientError:  # the client closed (the script ends)
+                    return
                 if found:
                     actor = found[0]
                     break
@@ -131,7 +134,10 @@ class GBuffers:
         elif not keep:
             self._drop([actor])
         else:
-            client.listen(actor, lambda s, k=key: self._deliver(k, s))
+            try:
+                client.listen(actor, lambda s, k=key: self._deliver(k, s))
+            except lockstep.ClientError:  # the client closed (the script ends)
+                pass
 
     def _deliver(self, key, sample):
         data = make_sensor_data(sample, self._sensor._world)

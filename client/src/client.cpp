@@ -1131,7 +1131,10 @@ void Client::listen(uint32_t sensor, SensorCallback callback) {
   l.callback = std::move(callback);
   const uint32_t run = impl_->world->run();
   const uint64_t now = impl_->done.first == run ? impl_->done.second : 0;
-  l.start = {run, std::max(now, info->spawn_frame)};
+  // Expected: the frames after the last completed one, from the frame whose tick carries
+  // the spawn on (as in CARLA, the first world.tick() after spawn_actor() and listen()
+  // brings the sensor's data of that very frame; synchronous_mode.py waits for it).
+  l.start = {run, std::max(now, info->spawn_frame > 0 ? info->spawn_frame - 1 : 0)};
   l.delivered = {run, 0};
   const double sensor_tick = std::atof(info->Attribute("sensor_tick", "0").c_str());
   l.per_frame = IsPerFrame(type) && !(sensor_tick > impl_->world->settings().fixed_delta_seconds() + 1e-9);

@@ -129,7 +129,7 @@ def test_calls_lockstep_lacks_raise_naming_themselves_not_attribute_error():
     whose message names it (never AttributeError, never a silent no-op)."""
     calls = {carla.Vehicle: ['close_door', 'use_carsim_road', 'enable_chrono_physics', 'show_debug_telemetry',
                              'open_door', 'enable_carsim', 'get_ackermann_controller_settings'],
-             carla.World: ['get_names_of_all_objects', 'ground_projection', 'enable_environment_objects', 'cast_ray', 'get_lightmanager'],
+             carla.World: ['get_names_of_all_objects', 'enable_environment_objects', 'cast_ray', 'get_lightmanager'],
              carla.Sensor: ['disable_for_ros', 'enable_for_ros', 'send'],
              carla.Map: ['save_to_disk', 'cook_in_memory_map'],
              carla.TrafficManager: ['get_next_action', 'get_all_actions'],

@@ -386,6 +386,18 @@ def test_map_to_opendrive_and_geolocation(world):
         pytest.approx(origin.latitude)
 
 
+def test_ground_projection_finds_the_road_below(world):
+    spawn = world.get_map().get_spawn_points()[0]
+    road = world.get_map().get_waypoint(spawn.location).transform.location
+    above = carla.Location(spawn.location.x, spawn.location.y, road.z + 2.0)
+    hit = world.ground_projection(above, 5.0)  # automatic_control.py --agent Constant
+    assert isinstance(hit, carla.LabelledPoint) and hit.label == carla.CityObjectLabel.Roads
+    assert hit.location.z == pytest.approx(road.z, abs=0.05) and hit.location.x == above.x
+    assert world.ground_projection(above, 1.0) is None  # too far below
+    any_lane = world.get_map().get_waypoint(spawn.location, lane_type=carla.LaneType.Any)  # raised TypeError
+    assert any_lane is not None and any_lane.lane_type == carla.LaneType.Driving
+
+
 def test_tick_while_asynchronous_returns_the_next_frame(world):
     s = world.get_settings()
     assert s.synchronous_mode

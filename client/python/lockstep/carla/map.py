@@ -191,7 +191,7 @@ class Junction:
     def get_waypoints(self, lane_type=None):
         lane_type = LaneType.Driving if lane_type is None else lane_type
         return [(Waypoint(a, self._map), Waypoint(b, self._map))
-                for a, b in self._map._native.junction_waypoints(self._index, int(lane_type))]
+                for a, b in self._map._native.junction_waypoints(self._index, _lane_mask(lane_type))]
 
     def __eq__(self, o):
         return isinstance(o, Junction) and self.id == o.id
@@ -201,6 +201,12 @@ class Junction:
 
     def __repr__(self):
         return 'Junction(id=%s)' % self.id
+
+
+def _lane_mask(lane_type):
+    """CARLA's LaneType bits as the map library's mask (an int32: LaneType.Any is 0xFFFFFFFE,
+    whose top bit no lane type uses)."""
+    return int(lane_type) & 0x7FFFFFFF
 
 
 def _native_from_text(name, text):
@@ -347,7 +353,7 @@ class Map:
         return [_transform(p) for p in self._native.spawn_points(25.0)]
 
     def get_waypoint(self, location, project_to_road=True, lane_type=LaneType.Driving):
-        w = self._native.waypoint(location.x, -location.y, location.z, project_to_road, int(lane_type))
+        w = self._native.waypoint(location.x, -location.y, location.z, project_to_road, _lane_mask(lane_type))
         return Waypoint(w, self) if w is not None else None
 
     def get_waypoint_xodr(self, road_id, lane_id, s):

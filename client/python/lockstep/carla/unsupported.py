@@ -17,7 +17,6 @@ add_unsupported(Vehicle, {
 add_unsupported(World, {
     'get_names_of_all_objects': _NO_SCENE,
     'set_annotations_traverse_translucency': 'render has no translucent annotations to traverse',
-    'ground_projection': 'ray casts run inside the sensors service, not in clients',
     'enable_environment_objects': _NO_SCENE,
 })
 add_unsupported(Sensor, {

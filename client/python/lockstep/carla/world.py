@@ -16,7 +16,18 @@ from .geometry import Color, Location, Transform, Vector3D, from_enu_vector, shi
 from .map import Map
 
 __all__ = ['Client', 'World', 'WorldSettings', 'WeatherParameters', 'TrafficManager', 'WorldSnapshot', 'ActorSnapshot',
-           'Timestamp', 'maps_path', 'DebugHelper', 'OpendriveGenerationParameters']
+           'Timestamp', 'maps_path', 'DebugHelper', 'OpendriveGenerationParameters', 'LabelledPoint']
+
+
+class LabelledPoint:
+    """carla.LabelledPoint: a location and the carla.CityObjectLabel of what is there."""
+
+    def __init__(self, location=None, label=0):
+        self.location = Location(location) if location is not None else Location()
+        self.label = label
+
+    def __repr__(self):
+        return 'LabelledPoint(%r, %s)' % (self.location, self.label)
 
 
 class OpendriveGenerationParameters:
@@ -697,6 +708,21 @@ class World:
 
     def cast_ray(self, initial_location, final_location):
         unsupported('World.cast_ray', 'ray casts run inside the sensors service, not in clients')
+
+    def ground_projection(self, location, search_distance):
+        """CARLA's: the first surface straight below `location` within `search_distance` m,
+        as a carla.LabelledPoint, None if there is none. Lockstep's client has the map, not
+        the scene's meshes: the surface is the OpenDRIVE lane under the point (Roads, or
+        Sidewalks for sidewalk lanes); off the lanes it finds nothing."""
+        from .map import LaneType
+        wp = self.get_map().get_waypoint(location, project_to_road=False, lane_type=LaneType.Any)
+        if wp is None:
+            return None
+        z = wp.transform.location.z
+        if not 0.0 <= location.z - z <= float(search_distance):
+            return None
+        label = 2 if wp.lane_type == LaneType.Sidewalk else 1  # CityObjectLabel.Sidewalks / Roads
+        return LabelledPoint(Location(location.x, location.y, z), label)
 
     def project_point(self, location, direction, search_distance):
         unsupported('World.project_point', 'ray casts run inside the sensors service, not in clients')

@@ -80,7 +80,7 @@ def test_pedestrians_seed_reaches_the_walker_ai(sim):
     client.set_timeout(30)
 
     def walk(seed):
-        world = client.reload_world()
+        world = client.reload_world(False)  # keep synchronous mode (CARLA resets to asynchronous by default)
         world.set_pedestrians_seed(seed)
         carla_map = world.get_map()
         library = world.get_blueprint_library()

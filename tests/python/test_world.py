@@ -403,3 +403,15 @@ def test_the_first_tick_after_spawn_and_listen_brings_the_data_of_that_frame(wor
         assert frames == [frame], (blueprint, frames, frame)
         assert world.tick() == frame + 1 and frames == [frame, frame + 1], blueprint
         sensor.destroy()
+
+
+def test_vehicle_light_state_is_carlas_flag_type():
+    # manual_control.py: lights ^= carla.VehicleLightState.Position, then
+    # set_light_state(carla.VehicleLightState(lights)); CARLA's enum takes any bits.
+    bits = carla.VehicleLightState.NONE
+    bits ^= carla.VehicleLightState.Position
+    bits |= carla.VehicleLightState.LowBeam
+    state = carla.VehicleLightState(int(bits))
+    assert int(state) == 3 and state & carla.VehicleLightState.LowBeam
+    assert not state & carla.VehicleLightState.Brake
+    assert int(carla.VehicleLightState(0xFFFFFFFF)) == int(carla.VehicleLightState.All)

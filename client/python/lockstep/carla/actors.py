@@ -1,5 +1,6 @@
 """carla.Actor, Vehicle, Walker, TrafficLight, Sensor, WalkerAIController and their
 controls, over the states the physics services publish (GroundState, AirState)."""
+import enum
 import math
 import sys
 import threading
@@ -76,7 +77,9 @@ class ActorState:
     Dormant = 2
 
 
-class VehicleLightState:
+class VehicleLightState(enum.IntFlag):
+    """CARLA's bit flags: combined with | & ^, and callable on an int of bits
+    (manual_control.py: carla.VehicleLightState(current_lights))."""
     NONE = 0
     Position = 1
     LowBeam = 2
@@ -471,7 +474,7 @@ class Vehicle(Actor):
         """As get_physics_control: this client's last set_light_state until its frame's state."""
         s = self._state()
         bits = s.get('light_state', VehicleLightState.NONE) if s else VehicleLightState.NONE
-        return self._world._applied_value(self.id, 'light_state', bits)
+        return VehicleLightState(int(self._world._applied_value(self.id, 'light_state', bits)) & 0xFFFFFFFF)
 
     def apply_ackermann_control(self, control):
         self._world._require('ground_sim', 'Vehicle.apply_ackermann_control')

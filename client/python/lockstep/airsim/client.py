@@ -748,6 +748,9 @@ class VehicleClient:
             raise lockstep.ClientError('%s: image_type %r is not one of AirSim\'s (0..9)' % (call, r.image_type))
         a, cam, mount, fov_over, cs = self._camera(vehicle_name, r.camera_name, call)
         w, h, fov = self._capture(cs, it, fov_over)
+        if w * h > 1920 * 1080:
+            _unsupported('%s(camera %r, %dx%d)' % (call, cam, w, h), "an image's pixels are one DDS Image message, "
+                         'bounded at 1920x1080 BGRA (idl/lockstep/sensor.idl)')
         attrs = {'image_size_x': str(w), 'image_size_y': str(h), 'fov': repr(float(fov)),
                  'role_name': 'airsim_%s_%d' % (cam, it)}
         if it in _IMAGE_TYPE_NAMES:
@@ -1483,6 +1486,18 @@ class MultirotorClient(VehicleClient):
         return drivetrain
 
     def takeoffAsync(self, timeout_sec=20, vehicle_name=''):
+        """AirSim refuses a takeoff while the vehicle moves (> 0.05 m/s). A flying vehicle still
+        braking from its last command (air_sim holds where a timed move ends) is given up to 3 s
+        of simulation time to come to rest first; a falling one (vertical speed over 0.3 m/s) is refused."""
+        self._s.actor(vehicle_name)
+        st = self._mc.state(vehicle_name)
+        if not st['landed'] and abs(st['linear_velocity'][2]) < 0.3 and self._mc.is_api_control_enabled(vehicle_name):
+            dt = self._client.world_info()['settings']['fixed_delta_seconds'] or 0.05
+            for _ in range(int(3.0 / dt)):
+                st = self._mc.state(vehicle_name)
+                if math.sqrt(sum(v * v for v in st['linear_velocity'])) <= 0.04 or st['landed']:
+                    break
+                self._s.wait_frames(1)
         return self._cmd('takeoffAsync', vehicle_name, self._mc.takeoff, timeout_sec, vehicle_name)
 
     def landAsync(self, timeout_sec=60, vehicle_name=''):

@@ -202,3 +202,21 @@ def test_a_move_that_cannot_complete_times_out_and_says_so(client, caplog, monke
     finally:
         logger.removeHandler(caplog.handler)
     assert "moveToPositionAsync on vehicle 'Drone2' still running" in caplog.text and 'not getting anywhere' in caplog.text
+
+
+def test_car_client_drives_a_ground_sim_car(client):
+    """AirSim's CarClient on ground_sim: with no car, a PhysXCar on the map's first spawn point;
+    throttle moves it forward along its heading (NED from its start)."""
+    if not has_service('ground_sim'):
+        pytest.skip('needs ground_sim')
+    import airsim
+    car = airsim.CarClient()
+    controls = airsim.CarControls(throttle=0.5)
+    car.setCarControls(controls)
+    for _ in range(40):
+        car._client.tick()
+    s = car.getCarState()
+    assert s.speed > 1.0
+    assert s.kinematics_estimated.position.get_length() > 1.0
+    assert car.getCarControls().throttle == 0.5
+    car.setCarControls(airsim.CarControls(brake=1.0))

@@ -61,9 +61,13 @@ class Simulation:
         self.proc = subprocess.Popen([os.path.join(BIN, 'lockstep'), 'up', self.config], stdout=self.log,
                                      stderr=subprocess.STDOUT, preexec_fn=_end_with_parent)
         import lockstep
-        self.client = lockstep.Client(domain=DOMAIN, timeout=30)
-        if not self.client.wait_ready(60):
-            raise RuntimeError('simulation not ready: %s' % open(self.log.name).read()[-2000:])
+        try:
+            self.client = lockstep.Client(domain=DOMAIN, timeout=30)
+            if not self.client.wait_ready(60):
+                raise RuntimeError('simulation not ready: %s' % open(self.log.name).read()[-2000:])
+        except BaseException:
+            self.stop()  # a simulation that did not start must not keep running for the next tests
+            raise
 
     def output(self):
         return open(self.log.name).read()

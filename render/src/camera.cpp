@@ -82,7 +82,8 @@ bool SameLens(const Camera& a, const Camera& b) {
   const bool geometry = a.width == b.width && a.height == b.height && a.fov_deg == b.fov_deg &&
                         a.lens_circle_multiplier == b.lens_circle_multiplier && a.lens_circle_falloff == b.lens_circle_falloff &&
                         a.lens_k == b.lens_k && a.lens_kcube == b.lens_kcube && a.lens_x_size == b.lens_x_size &&
-                        a.lens_y_size == b.lens_y_size && a.lines_only == b.lines_only;
+                        a.lens_y_size == b.lens_y_size && a.lines_only == b.lines_only &&
+                        a.wide_angle == b.wide_angle;
   // The colour settings matter only where both have a colour output (the pass takes them
   // from the one that has: TakeColourSettings).
   if (!geometry || !(a.outputs & kOutColor) || !(b.outputs & kOutColor)) return geometry;

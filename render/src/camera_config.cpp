@@ -62,6 +62,26 @@ std::vector<AttributeSpec> Rgb() {
   v.push_back(F("chromatic_aberration_offset", 0, 0, 1));
   return v;
 }
+// CARLA 0.9.16's wide-angle lens cameras: fov is vertical and may pass 180 degrees; the lens
+// model and its parameters (SceneCaptureSensor_WideAngleLens defaults: perspective, 90
+// degrees, its Kannala-Brandt coefficients).
+std::vector<AttributeSpec> WideAngle(std::vector<AttributeSpec> v) {
+  for (auto& a : v) {
+    if (a.id == "fov") a = F("fov", 90, 1, 360);
+  }
+  v.push_back(S("camera_model", "perspective",
+                {"perspective", "stereographic", "equidistant", "equisolid", "orthographic", "kannala_brandt"}));
+  v.push_back(AttributeSpec{"k0", 'f', "0.08309221636708493", -100, 100, {}});
+  v.push_back(AttributeSpec{"k1", 'f', "0.01112126630599195", -100, 100, {}});
+  v.push_back(AttributeSpec{"k2", 'f', "0.008587261043925865", -100, 100, {}});
+  v.push_back(AttributeSpec{"k3", 'f', "0.0008542188930970716", -100, 100, {}});
+  v.push_back(B("equirectangular", false));
+  v.push_back(B("perspective", false));
+  v.push_back(B("fov_mask", false));
+  v.push_back(F("fov_fade_size", 0, 0, 360));
+  v.push_back(F("longitude_offset", 0, -360, 360));
+  return v;
+}
 std::vector<AttributeSpec> With(std::vector<AttributeSpec> v, const std::vector<AttributeSpec>& more) {
   v.insert(v.end(), more.begin(), more.end());
   return v;
@@ -90,6 +110,7 @@ const std::vector<CameraBlueprintSpec>& CameraBlueprints() {
                     I("refractory_period_ns", 0, 0, 1e12), B("use_log", true), F("log_eps", 0.001, 1e-9, 1)})},
       // CARLA 0.9.16's Cosmos control visualization: the scene's boxes and lines on black.
       {"sensor.camera.cosmos_visualization", ImageKind::kRgb, Basic()},
+      {"sensor.camera.rgb.wide_angle_lens", ImageKind::kRgb, WideAngle(Rgb())},
       {"sensor.camera.airsim", ImageKind::kAirSimScene,
        With(Rgb(), {S("image_type", "Scene",
                       {"Scene", "DepthPlanar", "DepthPerspective", "DepthVis", "DisparityNormalized", "Segmentation",
@@ -185,6 +206,18 @@ CameraSettings ParseCamera(const std::string& blueprint, const std::map<std::str
   if (blueprint == "sensor.camera.semantic_segmentation") s.paper_classes = choice("classes") == "paper";
   if (blueprint == "sensor.camera.airsim") s.kind = AirSimImageKind(choice("image_type"));
   s.camera.lines_only = blueprint == "sensor.camera.cosmos_visualization";
+  if (Find(*bp, "camera_model")) {
+    auto& lens = s.camera.wide_angle;
+    lens.enabled = true;
+    lens.model = *LensModelFromName(choice("camera_model"));
+    static const char* const kNames[4] = {"k0", "k1", "k2", "k3"};
+    for (std::size_t i = 0; i < 4; ++i) lens.k[i] = number(kNames[i]);
+    lens.equirectangular = boolean("equirectangular");
+    lens.perspective = boolean("perspective");
+    lens.fov_mask = boolean("fov_mask");
+    lens.fov_fade_size = number("fov_fade_size");
+    lens.longitude_offset = number("longitude_offset");
+  }
   if (s.kind == ImageKind::kDvs) {
     s.dvs.positive_threshold = number("positive_threshold");
     s.dvs.negative_threshold = number("negative_threshold");

@@ -8,6 +8,7 @@
 
 #include "gl_util.h"
 #include "lockstep/render/motion_blur.h"
+#include "lockstep/render/wide_angle_cube.h"
 #include "shaders.h"
 #include "static_scene.h"
 
@@ -803,6 +804,43 @@ void Renderer::SetTuning(const RenderTuning& tuning) { impl_->tuning = tuning; }
 const RenderTuning& Renderer::tuning() const { return impl_->tuning; }
 
 void Renderer::Render(const std::vector<Camera>& cameras, const WorldView& world, const Sink& sink) {
+  if (std::any_of(cameras.begin(), cameras.end(), [](const Camera& c) { return c.wide_angle.enabled; })) {
+    // Wide-angle lens cameras: six cube faces each, composed after (wide_angle_cube.h).
+    std::vector<Camera> flat;
+    std::vector<std::pair<std::size_t, int>> origin;  // camera index, cube face (-1: the camera itself)
+    for (std::size_t i = 0; i < cameras.size(); ++i) {
+      const Camera& c = cameras[i];
+      if (!c.wide_angle.enabled) {
+        flat.push_back(c);
+        origin.emplace_back(i, -1);
+        continue;
+      }
+      if (!(c.fov_deg > 0 && c.fov_deg <= 360)) {
+        throw std::invalid_argument("render: wide-angle fov " + std::to_string(c.fov_deg) + " out of (0, 360]");
+      }
+      for (int f = 0; f < 6; ++f) {
+        flat.push_back(WideAngleFace(c, f));
+        origin.emplace_back(i, f);
+      }
+    }
+    std::vector<std::array<CameraFrame, 6>> faces(cameras.size());
+    Render(flat, world, [&](std::size_t k, const CameraImages& im) {
+      const auto [i, f] = origin[k];
+      if (f < 0) sink(i, im);
+      else faces[i][static_cast<std::size_t>(f)] = CameraFrame::Copy(im);
+    });
+    for (std::size_t i = 0; i < cameras.size(); ++i) {
+      if (!cameras[i].wide_angle.enabled) continue;
+      const CameraFrame out = ComposeWideAngle(cameras[i], faces[i]);
+      CameraImages im;
+      im.width = out.width;
+      im.height = out.height;
+      im.color = out.color.empty() ? nullptr : out.color.data();
+      im.labels = out.labels.empty() ? nullptr : out.labels.data();
+      sink(i, im);
+    }
+    return;
+  }
   for (const Camera& c : cameras) {
     if (c.width < 1 || c.height < 1 || c.width > 8192 || c.height > 8192) {
       throw std::invalid_argument("render: image size " + std::to_string(c.width) + "x" + std::to_string(c.height) + " out of range");

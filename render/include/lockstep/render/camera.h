@@ -9,6 +9,7 @@
 #include <string>
 
 #include "lockstep/render/types.h"
+#include "lockstep/render/wide_angle.h"
 
 namespace lockstep::render {
 
@@ -47,6 +48,9 @@ struct Camera {
   // CARLA 0.9.16's sensor.camera.cosmos_visualization: no scene, only lines on black (the
   // world's debug shapes and WorldView::cosmos), unlit.
   bool lines_only = false;
+  // CARLA 0.9.16's sensor.camera.rgb.wide_angle_lens: a lens model instead of the pinhole;
+  // fov_deg is then the vertical field of view (wide_angle.h). The renderer draws a cube map.
+  WideAngleLens wide_angle;
 
   double Focal() const;  // px
   bool HasLensDistortion() const;  // lens_circle_multiplier > 0 and lens_k or lens_kcube not 0

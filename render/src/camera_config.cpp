@@ -111,6 +111,10 @@ const std::vector<CameraBlueprintSpec>& CameraBlueprints() {
       // CARLA 0.9.16's Cosmos control visualization: the scene's boxes and lines on black.
       {"sensor.camera.cosmos_visualization", ImageKind::kRgb, Basic()},
       {"sensor.camera.rgb.wide_angle_lens", ImageKind::kRgb, WideAngle(Rgb())},
+      {"sensor.camera.depth.wide_angle_lens", ImageKind::kDepth, WideAngle(Basic())},
+      {"sensor.camera.semantic_segmentation.wide_angle_lens", ImageKind::kSemantic, WideAngle(Basic())},
+      {"sensor.camera.instance_segmentation.wide_angle_lens", ImageKind::kInstance, WideAngle(Basic())},
+      {"sensor.camera.normals.wide_angle_lens", ImageKind::kNormals, WideAngle(Basic())},
       {"sensor.camera.airsim", ImageKind::kAirSimScene,
        With(Rgb(), {S("image_type", "Scene",
                       {"Scene", "DepthPlanar", "DepthPerspective", "DepthVis", "DisparityNormalized", "Segmentation",

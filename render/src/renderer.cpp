@@ -837,6 +837,8 @@ void Renderer::Render(const std::vector<Camera>& cameras, const WorldView& world
       im.height = out.height;
       im.color = out.color.empty() ? nullptr : out.color.data();
       im.labels = out.labels.empty() ? nullptr : out.labels.data();
+      im.depth = out.depth.empty() ? nullptr : out.depth.data();
+      im.normals = out.normals.empty() ? nullptr : out.normals.data();
       sink(i, im);
     }
     return;

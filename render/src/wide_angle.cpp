@@ -149,7 +149,7 @@ Camera WideAngleFace(const Camera& cam, int face) {
   c.width = c.height = static_cast<int>(std::clamp(std::isfinite(n) ? n : 16.0, 16.0, 2048.0));
   c.pose.orientation = (cam.pose.orientation * FaceRotation(face)).normalized();
   c.previous_pose.reset();
-  c.outputs = cam.outputs & (kOutColor | kOutLabels);
+  c.outputs = cam.outputs & (kOutColor | kOutLabels | kOutDepth | kOutNormals);
   if (!c.outputs) c.outputs = kOutColor;
   c.motion_blur_intensity = 0;
   c.lens_circle_multiplier = 0;
@@ -164,8 +164,11 @@ CameraFrame ComposeWideAngle(const Camera& cam, const std::array<CameraFrame, 6>
   out.height = cam.height;
   const std::size_t n = static_cast<std::size_t>(cam.width) * cam.height;
   const bool colour = !faces[0].color.empty(), labels = !faces[0].labels.empty();
+  const bool depth = !faces[0].depth.empty(), normals = !faces[0].normals.empty();
   if (colour) out.color.assign(n * 4, 0);
   if (labels) out.labels.assign(n * 4, 0);
+  if (depth) out.depth.assign(n, static_cast<float>(kFarPlane));
+  if (normals) out.normals.assign(n * 4, 0);
   for (std::size_t p = 0; p < n && colour; ++p) out.color[p * 4 + 3] = 255;
   for (int v = 0; v < cam.height; ++v) {
     for (int u = 0; u < cam.width; ++u) {
@@ -187,6 +190,9 @@ CameraFrame ComposeWideAngle(const Camera& cam, const std::array<CameraFrame, 6>
         }
       }
       if (labels && src.labels.size() >= (s + 1) * 4) std::copy_n(&src.labels[s * 4], 4, &out.labels[o * 4]);
+      // Depth and normals as the face drew them (planar to that face, its camera frame).
+      if (depth && src.depth.size() > s) out.depth[o] = src.depth[s];
+      if (normals && src.normals.size() >= (s + 1) * 4) std::copy_n(&src.normals[s * 4], 4, &out.normals[o * 4]);
     }
   }
   return out;

@@ -93,6 +93,32 @@ TEST(WideAngleLens, EquidistantPutsAPointAtAngleThetaAtRadiusFTheta) {
   EXPECT_EQ(Centroid(pinhole, tag::kCar).second, 0);
 }
 
+// The depth, segmentation and normals wide-angle blueprints (manual_control_fisheye.py
+// lists them) see through the same lens: labels agree with the colour camera's, depth of the
+// road ahead is finite.
+TEST(WideAngleLens, OtherKindsSeeThroughTheSameLens) {
+  for (const char* bp : {"sensor.camera.depth.wide_angle_lens", "sensor.camera.semantic_segmentation.wide_angle_lens",
+                         "sensor.camera.instance_segmentation.wide_angle_lens", "sensor.camera.normals.wide_angle_lens"}) {
+    EXPECT_TRUE(IsCameraBlueprint(bp)) << bp;
+    EXPECT_TRUE(ParseCamera(bp, {{"camera_model", "equisolid"}}).camera.wide_angle.enabled) << bp;
+  }
+  Renderer& r = SharedRenderer();
+  WorldView w;
+  const Vec3 car(10, 17.32, 0.75);
+  w.actors.push_back(Vehicle(r, 30, At(car.x(), car.y(), car.z(), 90)));
+  Camera cam = ParseCamera("sensor.camera.semantic_segmentation.wide_angle_lens",
+                           {{"camera_model", "equidistant"}, {"fov", "180"}, {"image_size_x", "201"}, {"image_size_y", "201"}})
+                   .camera;
+  cam.pose = At(0, 0, 1.5);
+  cam.outputs = kOutLabels | kOutDepth;
+  const auto frame = r.RenderFrames({cam}, w)[0];
+  const Vec3 d = (car - Vec3(0, 0, 1.5)).normalized();
+  const double f = LensFocal(LensModel::kEquidistant, M_PI, 201, {});
+  EXPECT_NEAR(Centroid(frame, tag::kCar).first.norm(), f * std::acos(d.x()), 2.5);
+  ASSERT_EQ(frame.depth.size(), 201u * 201u);
+  EXPECT_LT(frame.Depth(100, 150), 10.0f) << "the road below the axis";
+}
+
 // Every lens attribute changes the image.
 TEST(WideAngleLens, EachAttributeChangesTheImage) {
   Renderer& r = SharedRenderer();

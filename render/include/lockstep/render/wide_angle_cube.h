@@ -2,7 +2,8 @@
 // How the renderer draws a wide-angle lens camera (Camera::wide_angle): six 90 degree
 // square pinhole faces at the camera's position (a cube map, as CARLA's
 // SceneCaptureSensor_WideAngleLens captures), then each output pixel takes the face pixel
-// its lens ray (WideAngleRay) passes through, weighted by the fov fade. Colour and labels.
+// its lens ray (WideAngleRay) passes through, weighted by the fov fade (colour). Colour, labels, and
+// depth and normals as the face drew them (planar to the face, in its camera frame).
 #include <array>
 
 #include "lockstep/render/camera.h"

@@ -75,6 +75,7 @@ std::vector<AttributeSpec> WideAngle(std::vector<AttributeSpec> v) {
   v.push_back(AttributeSpec{"k1", 'f', "0.01112126630599195", -100, 100, {}});
   v.push_back(AttributeSpec{"k2", 'f', "0.008587261043925865", -100, 100, {}});
   v.push_back(AttributeSpec{"k3", 'f', "0.0008542188930970716", -100, 100, {}});
+  v.push_back(F("focal_length", 0, 0, 1e6));
   v.push_back(B("equirectangular", false));
   v.push_back(B("perspective", false));
   v.push_back(B("fov_mask", false));
@@ -221,6 +222,7 @@ CameraSettings ParseCamera(const std::string& blueprint, const std::map<std::str
     lens.fov_mask = boolean("fov_mask");
     lens.fov_fade_size = number("fov_fade_size");
     lens.longitude_offset = number("longitude_offset");
+    lens.focal_length = number("focal_length");
   }
   if (s.kind == ImageKind::kDvs) {
     s.dvs.positive_threshold = number("positive_threshold");

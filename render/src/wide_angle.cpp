@@ -79,6 +79,11 @@ double LensFocal(LensModel model, double fov_rad, int height, const std::array<d
   return height * 0.5 / LensRadius(model, fov_rad * 0.5, k);
 }
 
+double WideAngleFocal(const WideAngleLens& lens, int height, double fov_deg) {
+  if (lens.focal_length > 0) return lens.focal_length;
+  return LensFocal(lens.model, fov_deg * M_PI / 180.0, height, lens.k);
+}
+
 std::optional<LensRay> WideAngleRay(const WideAngleLens& lens, int width, int height, double fov_deg, double u, double v) {
   const double half_fov = fov_deg * M_PI / 360.0;
   const double x = u - width * 0.5, y = v - height * 0.5;
@@ -97,7 +102,7 @@ std::optional<LensRay> WideAngleRay(const WideAngleLens& lens, int width, int he
     // CARLA re-projects the lens image to a pinhole of the same vertical field of view.
     theta = std::atan(r / LensFocal(LensModel::kPerspective, 2 * half_fov, height, lens.k));
   } else {
-    theta = LensAngle(lens.model, r / LensFocal(lens.model, 2 * half_fov, height, lens.k), lens.k);
+    theta = LensAngle(lens.model, r / WideAngleFocal(lens, height, fov_deg), lens.k);
   }
   if (!std::isfinite(theta) || theta > M_PI || theta < 0) return std::nullopt;
   if (lens.fov_mask) {
@@ -137,7 +142,8 @@ double CentreResolution(const Camera& cam) {
   const auto& l = cam.wide_angle;
   const double fov = cam.fov_deg * M_PI / 180.0;
   if (l.equirectangular) return cam.height / fov;
-  return LensFocal(l.perspective ? LensModel::kPerspective : l.model, fov, cam.height, l.k);
+  if (l.perspective) return LensFocal(LensModel::kPerspective, fov, cam.height, l.k);
+  return WideAngleFocal(l, cam.height, cam.fov_deg);
 }
 }  // namespace
 

@@ -62,6 +62,9 @@ TEST(WideAngleLens, BlueprintHasCarlasAttributesAndRejectsBadOnes) {
   EXPECT_NEAR(s.camera.wide_angle.k[0], 0.08309221636708493, 1e-12);
   EXPECT_FALSE(ParseCamera("sensor.camera.rgb", {}).camera.wide_angle.enabled);
   EXPECT_EQ(ParseCamera(kWide, {{"fov", "220"}, {"camera_model", "equidistant"}}).camera.fov_deg, 220);
+  EXPECT_EQ(s.camera.wide_angle.focal_length, 0);
+  EXPECT_NEAR(WideAngleFocal(s.camera.wide_angle, 600, 90), 300, 1e-9);
+  EXPECT_EQ(WideAngleFocal(ParseCamera(kWide, {{"focal_length", "123"}}).camera.wide_angle, 600, 90), 123);
   EXPECT_THROW(ParseCamera(kWide, {{"camera_model", "fisheye"}}), std::invalid_argument);
   EXPECT_THROW(ParseCamera(kWide, {{"k2", "abc"}}), std::invalid_argument);
 }
@@ -141,6 +144,7 @@ TEST(WideAngleLens, EachAttributeChangesTheImage) {
       {{}, "fov_mask", "true"},
       {{{"fov_mask", "true"}, {"camera_model", "equidistant"}, {"fov", "150"}}, "fov_fade_size", "30"},
       {{{"equirectangular", "true"}}, "longitude_offset", "40"},
+      {{{"camera_model", "equidistant"}}, "focal_length", "20"},
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.attr);

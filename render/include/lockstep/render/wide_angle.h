@@ -27,6 +27,7 @@ struct WideAngleLens {
   bool fov_mask = false;         // black outside the field of view
   double fov_fade_size = 0;      // deg: with fov_mask, fades to black over this band inside the edge
   double longitude_offset = 0;   // deg: equirectangular images turn by this about the up axis
+  double focal_length = 0;       // px: > 0 replaces the focal length the fov gives (CARLA's focal_length)
   bool operator==(const WideAngleLens&) const = default;
 };
 
@@ -49,6 +50,8 @@ struct LensRay {
   Eigen::Vector3d direction;
   double weight = 1;
 };
+// The lens's focal length in px: focal_length where > 0, else LensFocal of the fov.
+double WideAngleFocal(const WideAngleLens& lens, int height, double fov_deg);
 std::optional<LensRay> WideAngleRay(const WideAngleLens& lens, int width, int height, double fov_deg, double u, double v);
 
 }  // namespace lockstep::render

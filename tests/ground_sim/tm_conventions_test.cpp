@@ -5,19 +5,13 @@
 
 #include "lockstep/ground/world.h"
 #include "test_towns.h"
+#include "traffic_test_helpers.h"
 
 namespace lockstep::ground {
 namespace {
 
-constexpr double kDt = 0.05;
-
-Pose BeforeLight(const Town& town, size_t index, double back, double half_z) {
-  const auto& stop = town.Lights().at(index).info.stop_waypoints.at(0);
-  auto before = town.Map().Previous(stop, back);
-  EXPECT_FALSE(before.empty());
-  const auto& wp = before.front();
-  return Pose::FromYaw(wp.transform.location + Vec3(0, 0, half_z + 0.02), wp.transform.yaw);
-}
+using testing::BeforeLight;
+using testing::kDt;
 
 // CARLA: every tick at a red light the car stops unless a draw falls below
 // ignore_lights_percentage. At 50 % a car held at a frozen red light therefore creeps over

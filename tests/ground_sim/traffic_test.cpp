@@ -8,20 +8,13 @@
 
 #include "lockstep/ground/world.h"
 #include "test_towns.h"
+#include "traffic_test_helpers.h"
 
 namespace lockstep::ground {
 namespace {
 
-constexpr double kDt = 0.05;
-
-// The lane of light `index`'s first stop waypoint, `back` metres before the line.
-Pose BeforeLight(const Town& town, size_t index, double back, double half_z) {
-  const auto& stop = town.Lights().at(index).info.stop_waypoints.at(0);
-  auto before = town.Map().Previous(stop, back);
-  EXPECT_FALSE(before.empty());
-  const auto& wp = before.front();
-  return Pose::FromYaw(wp.transform.location + Vec3(0, 0, half_z + 0.02), wp.transform.yaw);
-}
+using testing::BeforeLight;
+using testing::kDt;
 
 TEST(GroundTraffic, CatalogHasCarlasBlueprints) {
   std::set<BaseType> types;

@@ -332,6 +332,10 @@ void GroundService::Apply(const msg::Command& c) {
         case P::TM_AUTOPILOT: report(t.actor(), world_->SetAutopilot(t.actor(), t.value() != 0)); return;
         case P::TM_FORCE_LANE_CHANGE: report(t.actor(), world_->ForceLaneChange(t.actor(), t.value() != 0)); return;
         case P::TM_UPDATE_VEHICLE_LIGHTS: report(t.actor(), world_->SetUpdateVehicleLights(t.actor(), t.value() != 0)); return;
+        case P::TM_COLLISION_DETECTION:
+          report(t.actor(), world_->SetCollisionDetection(t.actor(), t.other_actor(), t.value() != 0));
+          return;
+        case P::TM_RESPAWN_BOUNDARIES: report(0, world_->SetRespawnBoundaries(t.value(), t.value2())); return;
         case P::TM_SET_PATH: {
           std::vector<ground::Vec3> path;
           for (const auto& p : t.path()) path.push_back(ToVec(p));

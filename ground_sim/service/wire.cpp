@@ -226,7 +226,9 @@ std::optional<ground::TmParam> FromWire(msg::TrafficManagerParameter p) {
     case P::TM_HYBRID_PHYSICS_MODE: return G::kHybridPhysicsMode;
     case P::TM_SYNCHRONOUS_MODE: return G::kSynchronousMode;
     case P::TM_RESPAWN_DORMANT_VEHICLES: return G::kRespawnDormantVehicles;
-    default: return std::nullopt;  // autopilot, set_path, set_route, force_lane_change: own calls
+    case P::TM_LANE_OFFSET: return G::kLaneOffset;
+    default: return std::nullopt;  // autopilot, set_path, set_route, force_lane_change, collision_detection,
+                                   // respawn boundaries, vehicle lights: own calls
   }
 }
 

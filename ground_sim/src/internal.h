@@ -58,6 +58,7 @@ struct TmState {
   double front_to_line = -1;             // m from the front bumper to its stop line last step
   Pose kin_target;                       // kinematic: pose at the end of this step
   TmVehicleParams params;
+  std::set<uint32_t> ignore_collision;   // collision_detection(this, other, False): others it does not avoid
   // Outputs of the last decision.
   double target_speed = 0;
   double steer_angle = 0;                // rad, bicycle, + left
@@ -202,6 +203,8 @@ struct World::Impl {
   bool has_pedestrians_seed = false;     // a client sent set_pedestrians_seed
   uint64_t pedestrians_seed = 0;
   Rng tm_rng;                            // TM-wide draws (respawn points)
+  std::vector<map::Waypoint> respawn_points;  // driving lane points every 5 m outside junctions (derived, not state)
+  bool respawn_points_ready = false;
   LightWeather weather;                  // what the TM's vehicle lights follow (saved)
 
   dWorldID world = nullptr;
@@ -270,6 +273,13 @@ struct World::Impl {
   void AnchorPath(VehicleActor* v);
   void Respawn(VehicleActor* v);
   bool HybridKinematic(const VehicleActor& v) const;
+  // CARLA's dormant actors: farther than actor_active_distance from every hero (none
+  // without a hero).
+  bool Dormant(const VehicleActor& v) const;
+  // CARLA's MotionPlanStage for a dormant vehicle with respawn_dormant_vehicles: to a free
+  // lane point at a random distance within the respawn bounds of `hero`.
+  void RespawnNearHero(VehicleActor* v, const Vec3& hero);
+  void PlaceAt(VehicleActor* v, const Pose& pose);
 
   // vehicle_lights.cpp
   void StepVehicleLights();

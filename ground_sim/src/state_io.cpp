@@ -12,9 +12,10 @@ namespace lockstep::ground {
 namespace {
 
 constexpr uint32_t kMagic = 0x47524E44;  // "GRND"
-constexpr uint32_t kVersion = 6;  // 2: every field written explicitly (no struct padding); 3: stop signs, contacts of the last step, crosswalks;
+constexpr uint32_t kVersion = 7;  // 2: every field written explicitly (no struct padding); 3: stop signs, contacts of the last step, crosswalks;
                                    // 4: benchmark onsets, distance, off-road fraction, props; 5: pedestrians seed, walker graph routes;
-                                   // 6: the weather the TM's vehicle lights follow
+                                   // 6: the weather the TM's vehicle lights follow; 7: lane offsets, collision
+                                   // detection, respawn boundaries
 
 class Writer {
  public:
@@ -103,7 +104,8 @@ void PutTmGlobal(Writer& w, const TmGlobal& t) {
   for (double x : {t.distance_to_leading_vehicle, t.percentage_speed_difference, t.ignore_lights_percentage,
                    t.ignore_signs_percentage, t.ignore_vehicles_percentage, t.ignore_walkers_percentage, t.keep_right_percentage,
                    t.random_left_lanechange_percentage, t.random_right_lanechange_percentage, t.hybrid_physics_radius,
-                   t.blocked_time_threshold, t.red_light_blocked_time_threshold})
+                   t.blocked_time_threshold, t.red_light_blocked_time_threshold, t.lane_offset, t.respawn_lower_bound,
+                   t.respawn_upper_bound, t.actor_active_distance})
     w.Pod(x);
   for (bool b : {t.auto_lane_change, t.hybrid_physics_mode, t.synchronous_mode, t.respawn_dormant_vehicles}) w.Pod(b);
   w.Pod(t.random_seed);
@@ -112,7 +114,8 @@ void GetTmGlobal(Reader& r, TmGlobal* t) {
   for (double* x : {&t->distance_to_leading_vehicle, &t->percentage_speed_difference, &t->ignore_lights_percentage,
                     &t->ignore_signs_percentage, &t->ignore_vehicles_percentage, &t->ignore_walkers_percentage,
                     &t->keep_right_percentage, &t->random_left_lanechange_percentage, &t->random_right_lanechange_percentage,
-                    &t->hybrid_physics_radius, &t->blocked_time_threshold, &t->red_light_blocked_time_threshold})
+                    &t->hybrid_physics_radius, &t->blocked_time_threshold, &t->red_light_blocked_time_threshold,
+                    &t->lane_offset, &t->respawn_lower_bound, &t->respawn_upper_bound, &t->actor_active_distance})
     *x = r.Pod<double>();
   for (bool* b : {&t->auto_lane_change, &t->hybrid_physics_mode, &t->synchronous_mode, &t->respawn_dormant_vehicles})
     *b = r.Pod<bool>();
@@ -122,7 +125,8 @@ void GetTmGlobal(Reader& r, TmGlobal* t) {
 void PutTmParams(Writer& w, const TmVehicleParams& p) {
   for (double x : {p.distance_to_leading_vehicle, p.percentage_speed_difference, p.desired_speed, p.ignore_lights_percentage,
                    p.ignore_signs_percentage, p.ignore_vehicles_percentage, p.ignore_walkers_percentage, p.auto_lane_change,
-                   p.keep_right_percentage, p.random_left_lanechange_percentage, p.random_right_lanechange_percentage})
+                   p.keep_right_percentage, p.random_left_lanechange_percentage, p.random_right_lanechange_percentage,
+                   p.lane_offset})
     w.Pod(x);
   w.Pod(p.update_lights);
 }
@@ -130,7 +134,7 @@ void GetTmParams(Reader& r, TmVehicleParams* p) {
   for (double* x : {&p->distance_to_leading_vehicle, &p->percentage_speed_difference, &p->desired_speed,
                     &p->ignore_lights_percentage, &p->ignore_signs_percentage, &p->ignore_vehicles_percentage,
                     &p->ignore_walkers_percentage, &p->auto_lane_change, &p->keep_right_percentage,
-                    &p->random_left_lanechange_percentage, &p->random_right_lanechange_percentage})
+                    &p->random_left_lanechange_percentage, &p->random_right_lanechange_percentage, &p->lane_offset})
     *x = r.Pod<double>();
   r.Get(&p->update_lights);
 }
@@ -282,6 +286,8 @@ void PutTm(Writer& w, const TmState& s) {
   w.Pod(s.ignore_sign), w.Pod(s.sign_wait), w.Pod(s.sign_done_key);
   w.Pod(s.entry_key), w.Pod(s.front_to_line), w.P(s.kin_target), PutTmParams(w, s.params), w.Pod(s.target_speed);
   w.Pod(s.steer_angle), w.Pod<int32_t>(s.light), w.Pod(s.light_distance);
+  w.Pod<uint32_t>(static_cast<uint32_t>(s.ignore_collision.size()));
+  for (uint32_t id : s.ignore_collision) w.Pod(id);
 }
 void GetTm(Reader& r, const map::Map& m, TmState* s) {
   s->path = GetWaypoints(r, m);
@@ -298,6 +304,8 @@ void GetTm(Reader& r, const map::Map& m, TmState* s) {
   GetTmParams(r, &s->params), r.Get(&s->target_speed), r.Get(&s->steer_angle);
   s->light = r.Pod<int32_t>();
   r.Get(&s->light_distance);
+  const auto ignored = r.Pod<uint32_t>();
+  for (uint32_t k = 0; k < ignored; ++k) s->ignore_collision.insert(r.Pod<uint32_t>());
 }
 
 }  // namespace

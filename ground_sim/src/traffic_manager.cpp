@@ -19,6 +19,15 @@ constexpr double kPhysicsLateralAccel = 1.5;  // m/s^2 in curves for cars on phy
 constexpr double kStopSignTime = 2.0;      // s of full stop at a stop sign (docs/ground.md)
 constexpr double kLaneObstacleDistance = 50.0;  // m: a slower leader this close triggers a lane change (CARLA)
 constexpr double kLaneChangeCooldown = 5.0;     // s between two lane changes of a vehicle
+// Respawn of dormant vehicles (CARLA's MotionPlanStage, InMemoryMap::GetWaypointsInDelta,
+// Constants.h): a square ring DELTA wide around the hero, ATTEMPTS_TO_TELEPORT candidates,
+// each free when no vehicle is within a geodesic grid length, the car put 0.5 m above it.
+constexpr double kRespawnDelta = 25.0;          // m, Map::DELTA
+constexpr double kRespawnZDelta = 500.0;        // m, Map::Z_DELTA
+constexpr int kRespawnAttempts = 5;             // MotionPlan::ATTEMPTS_TO_TELEPORT
+constexpr double kRespawnFree = 20.0;           // m, Map::MAX_GEODESIC_GRID_LENGTH
+constexpr double kRespawnLift = 0.5;            // m above the lane point
+constexpr double kRespawnSpacing = 5.0;         // m between candidate lane points (Map::MAP_RESOLUTION)
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
@@ -50,8 +59,23 @@ int TurnOf(const map::Map& m, const map::Waypoint& from, const map::Waypoint& br
 
 }  // namespace
 
+bool World::Impl::Dormant(const VehicleActor& v) const {
+  if (v.hero()) return false;
+  const Vec3 p = ToVec(dBodyGetPosition(v.body));
+  bool hero = false;
+  for (const auto& [id, o] : vehicles) {
+    if (!o->hero()) continue;
+    hero = true;
+    if ((ToVec(dBodyGetPosition(o->body)) - p).norm() <= tm.actor_active_distance) return false;
+  }
+  return hero;
+}
+
 bool World::Impl::HybridKinematic(const VehicleActor& v) const {
-  if (!tm.hybrid_physics_mode || !v.autopilot || v.hero() || !v.simulate_physics) return false;
+  if (!v.autopilot || v.hero() || !v.simulate_physics) return false;
+  // CARLA's dormant vehicles leave the physics world; the TM moves them by teleports.
+  if (Dormant(v)) return true;
+  if (!tm.hybrid_physics_mode) return false;
   const Vec3 p = ToVec(dBodyGetPosition(v.body));
   for (const auto& [id, o] : vehicles) {
     if (o->hero() && (ToVec(dBodyGetPosition(o->body)) - p).norm() < tm.hybrid_physics_radius) return false;
@@ -162,6 +186,19 @@ void World::Impl::MoveKinematic(VehicleActor* v, double dt) {
   dBodySetAngularVel(v->body, 0, 0, dyaw / dt);
 }
 
+void World::Impl::PlaceAt(VehicleActor* v, const Pose& pose) {
+  SetBodyPose(v->body, pose);
+  dBodySetLinearVel(v->body, 0, 0, 0);
+  dBodySetAngularVel(v->body, 0, 0, 0);
+  v->tm.path.clear();
+  v->tm.planned.clear();
+  v->tm.speed = 0;
+  v->tm.blocked = 0;
+  v->tm.committed_junction = -1;
+  v->tm.kin_target = pose;
+  v->has_footprint = false;
+}
+
 void World::Impl::Respawn(VehicleActor* v) {
   const auto& points = town->SpawnPoints();
   if (points.empty()) return;
@@ -173,16 +210,36 @@ void World::Impl::Respawn(VehicleActor* v) {
       if (id != v->id && (ToVec(dBodyGetPosition(o->body)) - pose.position).norm() < 10.0) free = false;
     }
     if (!free) continue;
-    SetBodyPose(v->body, pose);
-    dBodySetLinearVel(v->body, 0, 0, 0);
-    dBodySetAngularVel(v->body, 0, 0, 0);
-    v->tm.path.clear();
-    v->tm.planned.clear();
-    v->tm.speed = 0;
-    v->tm.blocked = 0;
-    v->tm.committed_junction = -1;
-    v->tm.kin_target = pose;
-    v->has_footprint = false;
+    PlaceAt(v, pose);
+    return;
+  }
+}
+
+void World::Impl::RespawnNearHero(VehicleActor* v, const Vec3& hero) {
+  if (!respawn_points_ready) {
+    for (const auto& w : town->Map().GenerateWaypoints(kRespawnSpacing)) {
+      if (!w.IsJunction()) respawn_points.push_back(w);
+    }
+    respawn_points_ready = true;
+  }
+  // CARLA: lower + next() x (upper - lower) / 100 with next() uniform in [0, 100); the lane
+  // points inside the square of half-width r + DELTA around the hero but not inside the one
+  // of half-width r (in the map's order; CARLA: its R-tree's), the first free of the first
+  // five. None free: the vehicle stays where it is.
+  const double lower = tm.respawn_lower_bound, upper = tm.respawn_upper_bound;
+  const double r = lower + v->tm.rng.Uniform() * (upper - lower);
+  int tried = 0;
+  for (const auto& w : respawn_points) {
+    const Vec3 d = Loc(w) - hero;
+    const double ring = std::max(std::abs(d.x()), std::abs(d.y()));
+    if (ring <= r || ring >= r + kRespawnDelta || std::abs(d.z()) >= kRespawnZDelta) continue;
+    if (++tried > kRespawnAttempts) return;
+    bool free = true;
+    for (const auto& [id, o] : vehicles) {
+      if (id != v->id && (ToVec(dBodyGetPosition(o->body)) - Loc(w)).head<2>().norm() < kRespawnFree) free = false;
+    }
+    if (!free) continue;
+    PlaceAt(v, Pose::FromYaw(Loc(w) + Vec3(0, 0, kRespawnLift + v->spec->half_extents.z()), w.transform.yaw));
     return;
   }
 }
@@ -228,11 +285,20 @@ bool World::Impl::ChangeLane(VehicleActor* v, bool left, const std::vector<Obsta
 
 void World::Impl::StepTrafficManager(double dt) {
   std::map<int, std::vector<const VehicleActor*>> junction_users;
+  // CARLA's hero location for respawns (one hero: here the lowest id).
+  const VehicleActor* hero = nullptr;
+  for (const auto& [id, v] : vehicles) {
+    if (v->hero()) {
+      hero = v.get();
+      break;
+    }
+  }
   for (auto& [id, v] : vehicles) {
     if (!v->autopilot) {
       v->kinematic = false;
       continue;
     }
+    if (tm.respawn_dormant_vehicles && hero && Dormant(*v)) RespawnNearHero(v.get(), ToVec(dBodyGetPosition(hero->body)));
     const bool kin = HybridKinematic(*v);
     if (kin && !v->kinematic) {
       dBodySetKinematic(v->body);
@@ -403,7 +469,7 @@ void World::Impl::TmVehicle(VehicleActor* v, double dt, std::map<int, std::vecto
         for (size_t k = i + 1; k < path.size() && path[k].junction == junction; ++k) mine.push_back(Loc(path[k]));
         bool conflict = false;
         for (const VehicleActor* o : (*junction_users)[junction]) {
-          if (o == v) continue;
+          if (o == v || s.ignore_collision.count(o->id)) continue;
           const auto& op = o->tm.path;
           bool same_entry = false;
           for (size_t k = 0; k + 1 < op.size(); ++k) {
@@ -457,7 +523,7 @@ void World::Impl::TmVehicle(VehicleActor* v, double dt, std::map<int, std::vecto
     const double ignore_w = Get(s.params.ignore_walkers_percentage, tm.ignore_walkers_percentage);
     double lead_gap = kInf, lead_v = 0;  // nearest vehicle ahead on the buffer
     for (const Obstacle& o : obstacles) {
-      if (o.id == v->id) continue;
+      if (o.id == v->id || s.ignore_collision.count(o.id)) continue;  // CARLA: collision_detection(v, o, False)
       const Vec3 rel = o.position - pose.position;
       if (std::abs(rel.x()) > reach || std::abs(rel.y()) > reach || std::abs(rel.z()) > 4.0) continue;
       if (o.position.x() < lo.x() || o.position.y() < lo.y() || o.position.x() > hi.x() || o.position.y() > hi.y()) continue;
@@ -526,15 +592,23 @@ void World::Impl::TmVehicle(VehicleActor* v, double dt, std::map<int, std::vecto
     v->control.steer = 0;
     return;
   }
-  // Physics: pure pursuit on the buffer, PI speed control.
+  // Physics: pure pursuit on the buffer, PI speed control. CARLA's lane offset moves the
+  // target point along the lane's right vector (> 0 right); kinematic (hybrid or dormant)
+  // vehicles follow the lane centre, as CARLA's teleports do.
   double steer = 0;
   if (path.size() >= 2) {
     const double lookahead = std::clamp(2.0 + 0.6 * speed, 3.0, 12.0);
     const Vec3 rear = pose.position - pose.orientation * Vec3(v->physics.wheelbase / 2, 0, 0);
-    Vec3 goal = Loc(path.back());
+    const double offset = Get(s.params.lane_offset, tm.lane_offset);
+    auto target = [&](size_t i) {
+      const double yaw = path[i].transform.yaw;
+      return Vec3(Loc(path[i]) + offset * Vec3(std::sin(yaw), -std::cos(yaw), 0));  // ENU right of the lane
+    };
+    Vec3 goal = target(path.size() - 1);
     for (size_t i = 1; i < path.size(); ++i) {
-      if ((Loc(path[i]) - rear).head<2>().norm() >= lookahead && (Loc(path[i]) - rear).dot(pose.orientation * Vec3::UnitX()) > 0) {
-        goal = Loc(path[i]);
+      const Vec3 p = target(i);
+      if ((p - rear).head<2>().norm() >= lookahead && (p - rear).dot(pose.orientation * Vec3::UnitX()) > 0) {
+        goal = p;
         break;
       }
     }
@@ -651,6 +725,10 @@ std::string World::SetTrafficManager(TmParam p, uint32_t id, double value) {
     case TmParam::kSynchronousMode:
       if (value == 0) return "ground_sim's Traffic Manager always runs in lock-step (synchronous mode)";
       return {};
+    case TmParam::kLaneOffset:
+      // CARLA: no limit (an offset into other lanes "might break the controller").
+      (v ? vp.lane_offset : I.tm.lane_offset) = value;
+      return {};
   }
   return "unknown traffic manager parameter";
 }
@@ -697,6 +775,24 @@ std::string World::SetRoute(uint32_t id, const std::vector<std::string>& options
   v->tm.planned.clear();
   // Re-plan from a few metres ahead so the next junction follows the route.
   while (v->tm.path.size() > 3) v->tm.path.pop_back();
+  return {};
+}
+
+std::string World::SetCollisionDetection(uint32_t id, uint32_t other, bool detect) {
+  auto* v = impl_->FindVehicle(id);
+  if (!v) return "actor " + std::to_string(id) + " is not a vehicle of ground_sim";
+  if (other == 0) return "collision_detection needs another actor";
+  if (detect) v->tm.ignore_collision.erase(other);
+  else v->tm.ignore_collision.insert(other);
+  return {};
+}
+
+std::string World::SetRespawnBoundaries(double lower, double upper) {
+  if (!std::isfinite(lower) || !std::isfinite(upper)) return "respawn boundaries are not finite";
+  auto& t = impl_->tm;
+  // CARLA's Parameters::SetBoundariesRespawnDormantVehicles with SetMaxBoundaries(20, actor_active_distance).
+  t.respawn_lower_bound = std::max(kRespawnMinLowerBound, lower);
+  t.respawn_upper_bound = std::min(t.actor_active_distance, upper);
   return {};
 }
 

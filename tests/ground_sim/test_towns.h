@@ -112,6 +112,20 @@ inline std::shared_ptr<const Town> CrosswalkTown() {
   return town;
 }
 
+// 5 km road along +x from x = -100 (lanes 1 and -1, as StraightTown without a wall): longer
+// than CARLA's actor_active_distance (2 km), so a hero at one end leaves the other dormant.
+inline std::shared_ptr<const Town> LongRoadTown() {
+  static std::shared_ptr<const Town> town = [] {
+    std::string xodr = StraightRoadXodr();
+    for (size_t at = xodr.find("length=\"600\""); at != std::string::npos; at = xodr.find("length=\"600\"", at))
+      xodr.replace(at, 12, "length=\"5000\"");
+    map::Map m = map::Map::FromString(xodr, "long");
+    std::vector<map::Mesh> meshes = map::BuildRoadMeshes(m);
+    return std::make_shared<const Town>(std::move(m), std::move(meshes));
+  }();
+  return town;
+}
+
 inline std::shared_ptr<const Town> Town01() {
   static std::shared_ptr<const Town> town = Town::Load(std::string(LOCKSTEP_CARLA_MAPS_DIR) + "/Town01.xodr", 42);
   return town;

@@ -42,7 +42,18 @@ struct TmGlobal {
   double blocked_time_threshold = 90.0;       // s, then respawned
   double red_light_blocked_time_threshold = 180.0;
   bool respawn_dormant_vehicles = false;
+  double lane_offset = 0;                     // m from the lane centre, > 0 right (CARLA's global_lane_offset)
+  // set_boundaries_respawn_dormant_vehicles: a dormant vehicle respawns this far from the
+  // hero (CARLA's Parameters.h defaults; set values are clamped to kRespawnMinLowerBound and
+  // actor_active_distance, as CARLA's SetMaxBoundaries).
+  double respawn_lower_bound = 100.0;         // m
+  double respawn_upper_bound = 1000.0;        // m
+  // CARLA's world setting actor_active_distance (not on the wire: its default): a vehicle
+  // farther than this from every hero is dormant (CARLA: large maps only).
+  double actor_active_distance = 2000.0;      // m
 };
+
+inline constexpr double kRespawnMinLowerBound = 20.0;  // m, CARLA: SetMaxBoundaries(20, actor_active_distance)
 
 inline constexpr double kUnset = std::numeric_limits<double>::quiet_NaN();
 
@@ -59,6 +70,7 @@ struct TmVehicleParams {
   double keep_right_percentage = kUnset;
   double random_left_lanechange_percentage = kUnset;
   double random_right_lanechange_percentage = kUnset;
+  double lane_offset = kUnset;                // m, > 0 right (vehicle_lane_offset)
   bool update_lights = false;                 // update_vehicle_lights: the TM drives its lights (CARLA: off)
 };
 
@@ -80,6 +92,7 @@ enum class TmParam {
   kRandomSeed,
   kRespawnDormantVehicles,
   kSynchronousMode,
+  kLaneOffset,                                // m from the lane centre, > 0 right; vehicle 0 = global
 };
 
 }  // namespace lockstep::ground

@@ -185,6 +185,13 @@ class World {
   std::string SetPath(uint32_t vehicle, const std::vector<Vec3>& locations);
   std::string SetRoute(uint32_t vehicle, const std::vector<std::string>& options);  // Left/Right/Straight
   std::string ForceLaneChange(uint32_t vehicle, bool left);
+  // CARLA's collision_detection(reference, other, detect): with detect false the TM vehicle
+  // `vehicle` ignores `other` (any actor id) as a hazard (car following, walkers, junction
+  // conflicts); true (the default) avoids it again. One way: `other` still avoids `vehicle`.
+  std::string SetCollisionDetection(uint32_t vehicle, uint32_t other, bool detect);
+  // CARLA's set_boundaries_respawn_dormant_vehicles: lower clamped up to 20 m, upper down to
+  // actor_active_distance (CARLA's Parameters::SetBoundariesRespawnDormantVehicles).
+  std::string SetRespawnBoundaries(double lower, double upper);
   const TmGlobal& TrafficManager() const;
 
   // Walker AI controllers (controller.ai.walker) by controller id.

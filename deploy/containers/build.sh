@@ -73,6 +73,7 @@ cp -r "$build_dir/maps" "$ctx/maps"
 cp "$root/deploy/qos/fastdds.xml" "$ctx/qos/fastdds.xml"
 cp "$root/deploy/multihost/fastdds.xml" "$ctx/qos/multihost.xml"
 cp "$here"/Containerfile.* "$ctx/"
+cp -r "$here/scripts" "$ctx/scripts"
 
 # 3. The images.
 build_one() {

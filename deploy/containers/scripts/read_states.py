@@ -1,11 +1,13 @@
 """A CARLA script for the client container: it ticks the synchronous world TICKS times and
 prints the state of every vehicle and drone as one JSON line (frame, type, role,
-location, rotation, velocity), the same in every deployment of deploy/containers/sim.yaml.
+location, rotation, velocity), the same in every deployment of deploy/containers/sim.yaml,
+then a TIMING line (ticks per second of wall time: the benchmark figure).
 
   lockstep python read_states.py [--ticks 200]
 """
 import argparse
 import json
+import time
 
 import carla
 
@@ -19,7 +21,9 @@ def main():
     client = carla.Client(a.host, a.port)
     client.set_timeout(60.0)
     world = client.get_world()
+    t0 = time.monotonic()
     frames = [world.tick() for _ in range(a.ticks)]
+    wall = time.monotonic() - t0
     snapshot = world.get_snapshot()
     states = []
     for actor in world.get_actors():
@@ -34,6 +38,9 @@ def main():
     states.sort(key=lambda s: s['id'])
     print('STATES ' + json.dumps({'first_frame': frames[0], 'frame': snapshot.frame, 'ticks': len(frames),
                                   'actors': states}, sort_keys=True), flush=True)
+    # Wall-clock figures (not part of the states: they differ from run to run).
+    print('TIMING %d ticks in %.3f s: %.1f ticks/s' % (len(frames), wall, len(frames) / wall if wall > 0 else 0.0),
+          flush=True)
 
 
 if __name__ == '__main__':

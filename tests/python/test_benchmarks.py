@@ -2,8 +2,6 @@
 sequences, the footprint measurement on CARLA's Town01, and real episodes on a
 simulation of our own (ground_sim + sensors on Town01, 10 frames per second) that end by
 success, by time-out and by collision, each counted as CARLA's benchmark counts it."""
-import math
-import os
 
 import pytest
 
@@ -306,3 +304,37 @@ def test_driving_onto_the_sidewalk_is_counted(ctx):
     assert r['end'] == 'time-out'
     assert max(x['intersection_offroad'] for x in rows) > 0.9
     assert r['intersection_offroad'] >= 1
+
+
+# ---- Leaderboard-style routes (no simulation) ----
+
+def test_route_completion_and_score():
+    from lockstep.benchmarks import leaderboard
+    ep = {'start': [0.0, 0.0, 0.0, 0.0], 'goal': [100.0, 0.0, 0.0, 0.0], 'route_m': 100.0,
+          'path': [[50.0, 0.0, 0.0], [100.0, 0.0, 0.0]]}
+    drive = [{'pos_x': float(x), 'pos_y': 0.5} for x in range(0, 41)]
+    assert leaderboard.route_completion(ep, drive) == pytest.approx(0.40)
+    # Off the route (20 m aside) nothing counts; going back does not undo progress.
+    aside = drive + [{'pos_x': 90.0, 'pos_y': 20.0}] + [{'pos_x': 10.0, 'pos_y': 0.0}]
+    assert leaderboard.route_completion(ep, aside) == pytest.approx(0.40)
+    assert leaderboard.route_completion(ep, drive, success=True) == 1.0
+    # A car collision (> 400 within 10 frames) on 40% of the route: 0.4 x 0.6 (2.0) = 0.4 x 1/(1+2/3) (2.1).
+    rows = [dict(r, intersection_offroad=0.0, intersection_otherlane=0.0, collision_vehicles=0.0 if i < 20 else 500.0,
+                 collision_pedestrians=0.0, collision_other=0.0) for i, r in enumerate(drive)]
+    s = leaderboard.score_route(ep, {'result': 0}, rows)
+    assert s['collisions_vehicle'] == 1
+    assert s['driving_score_2_0'] == pytest.approx(0.4 * 0.6)
+    assert s['driving_score_2_1'] == pytest.approx(0.4 * 0.6)
+
+
+def test_route_progress_follows_collinear_segments():
+    # A car past the end of the first segment is on the next one: the progress follows it
+    # (it stuck at segment ends once, giving 0 progress rewards between route points).
+    from lockstep.benchmarks.route import RouteProgress
+    ep = {'start': [0.0, 0.0], 'path': [[20.0, 0.0], [40.0, 0.0], [60.0, 0.0]]}
+    p = RouteProgress(ep)
+    assert p.update(5.0, 0.3) == pytest.approx(55.0)
+    assert p.update(25.0, 0.3) == pytest.approx(35.0)
+    assert p.update(47.5, -0.5) == pytest.approx(12.5)
+    assert p.update(10.0, 0.0) == pytest.approx(12.5)
+    assert p.completion() == pytest.approx(47.5 / 60)

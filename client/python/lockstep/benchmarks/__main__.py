@@ -42,7 +42,8 @@ def _weathers(text, default):
 
 
 class Towns:
-    """A simulation per town, one at a time."""
+    """One simulation for the whole run (started with the first town unless --connect);
+    each further town is loaded into it with client.load_world, as on a CARLA server."""
 
     def __init__(self, args):
         self.args = args
@@ -50,16 +51,16 @@ class Towns:
         self.ctx = None
 
     def open(self, town):
-        self.close()
         a = self.args
-        if a.connect:
+        if self.sim is None and not a.connect:
+            os.environ['LOCKSTEP_DOMAIN'] = str(a.domain)
+            self.sim = runner.Simulation(town, a.domain, a.out, dt=0.1, seed=a.seed)
+        else:
             import carla
             c = carla.Client('localhost', 2000)
             c.set_timeout(120)
-            c.load_world(town)
-        else:
-            os.environ['LOCKSTEP_DOMAIN'] = str(a.domain)
-            self.sim = runner.Simulation(town, a.domain, a.out, dt=0.1, seed=a.seed)
+            if c.get_world().get_map().name != os.path.basename(town).replace('.xodr', ''):
+                c.load_world(episodes_mod.find_map(town))
         self.ctx = runner.Context(dt=0.1, grid_m=a.grid)
         return self.ctx
 
@@ -79,7 +80,7 @@ def _write_summary(out, results):
 
 
 def run_corl2017(args):
-    agent = runner.make_agent(args.agent)
+    agent = runner.make_agent(args.agent, args.ignore_lights)
     train_w = _weathers(args.train_weathers, runner.TRAIN_WEATHERS)
     test_w = _weathers(args.test_weathers, runner.TEST_WEATHERS)
     weathers = train_w + [w for w in test_w if w not in train_w]
@@ -129,7 +130,7 @@ def run_corl2017(args):
 
 
 def run_nocrash(args):
-    agent = runner.make_agent(args.agent)
+    agent = runner.make_agent(args.agent, args.ignore_lights)
     train_w = _weathers(args.train_weathers, runner.TRAIN_WEATHERS)
     test_w = _weathers(args.test_weathers, [10, 14])
     weathers = train_w + [w for w in test_w if w not in train_w]
@@ -197,7 +198,7 @@ def run_leaderboard(args):
 def main(argv=None):
     ap = argparse.ArgumentParser(prog='lockstep bench', description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument('suite', choices=['corl2017', 'nocrash', 'generate'])
+    ap.add_argument('suite', choices=['corl2017', 'nocrash', 'leaderboard', 'generate'])
     ap.add_argument('--agent', default='autopilot', help='autopilot (Traffic Manager), basic, behavior')
     ap.add_argument('--episodes', type=int, default=25, help='episodes per task and weather (at most 25)')
     ap.add_argument('--towns', default='Town01,Town02')
@@ -207,6 +208,8 @@ def main(argv=None):
     ap.add_argument('--out', default='')
     ap.add_argument('--domain', type=int, default=int(os.environ.get('LOCKSTEP_DOMAIN', '0') or 0))
     ap.add_argument('--connect', action='store_true', help='use the simulation already running (load_world per town)')
+    ap.add_argument('--ignore-lights', action='store_true',
+                    help='the agent ignores traffic lights (CoRL 2017 allows it; the other cars obey them)')
     ap.add_argument('--grid', type=float, default=0.2, help='footprint sampling step in m (CARLA 0.8: 0.1)')
     ap.add_argument('--seed', type=int, default=0)
     ap.add_argument('--routes', default='', help='leaderboard: a JSON file of routes (default: the Navigation episodes)')

@@ -13,14 +13,12 @@ Per frame (10 frames per simulated second, as `-benchmark -fps=10`):
   0.8's `OnCollisionEvent`.
 """
 import csv
-import json
 import math
 import os
 import random
 import signal
 import subprocess
 import sys
-import tempfile
 import time
 
 from . import metrics
@@ -110,6 +108,9 @@ class Footprint:
 
     def __init__(self, carla_map, extent, grid_m=0.2):
         self.native = carla_map._native
+        if not (extent.x > 0 and extent.y > 0 and grid_m > 0):
+            raise ValueError('footprint: the bounding box extent (%g, %g) and the grid step %g must be positive'
+                             % (extent.x, extent.y, grid_m))
         xs = _grid(extent.x, grid_m)
         ys = _grid(extent.y, grid_m)
         self.samples = [(x, y) for x in xs for y in ys]
@@ -158,14 +159,21 @@ def collision_kind(other):
 
 class AutopilotAgent:
     """The privileged autopilot: CARLA's Traffic Manager drives the car along the episode's
-    route (TrafficManager.set_path through the route's points)."""
-    name = 'autopilot'
+    route (TrafficManager.set_path through the route's points). `ignore_lights`: the CoRL
+    2017 protocol lets agents ignore traffic lights (TrafficManager.ignore_lights_percentage
+    100); by default it stops at red lights like the other cars."""
+
+    def __init__(self, ignore_lights=False):
+        self.ignore_lights = ignore_lights
+        self.name = 'autopilot-ignore-lights' if ignore_lights else 'autopilot'
 
     def setup(self, ctx, ego, episode):
         import carla
         tm = ctx.client.get_trafficmanager()
         ego.set_autopilot(True, tm.get_port())
         tm.auto_lane_change(ego, False)   # a lane change drops the path
+        if self.ignore_lights:
+            tm.ignore_lights_percentage(ego, 100.0)
         ctx.world.tick()                  # the autopilot takes the car first, then its path
         # Leading points within 10 m of the car may already lie behind it (the TM keeps a few
         # metres of its own path first): a route to them would go round the block.
@@ -183,9 +191,10 @@ class CarlaAgent:
     """CARLA's BasicAgent or BehaviorAgent (PythonAPI/carla/agents, unmodified, imported from
     CARLA_AGENTS_PATH or ../shared/compat), with the goal as its destination."""
 
-    def __init__(self, kind, target_speed=None, behavior='normal'):
-        self.name = kind
+    def __init__(self, kind, target_speed=None, behavior='normal', ignore_lights=False):
+        self.name = kind + ('-ignore-lights' if ignore_lights else '')
         self.kind = kind
+        self.ignore_lights = ignore_lights
         self.target_speed = target_speed
         self.behavior = behavior
         p = agents_path()
@@ -203,11 +212,13 @@ class CarlaAgent:
             goal = past[0].transform.location
         if self.kind == 'basic':
             from agents.navigation.basic_agent import BasicAgent
-            opt = {}
+            opt = {'ignore_traffic_lights': True} if self.ignore_lights else {}
             self.agent = BasicAgent(ego, target_speed=self.target_speed or 20, opt_dict=opt)
         else:
             from agents.navigation.behavior_agent import BehaviorAgent
             self.agent = BehaviorAgent(ego, behavior=self.behavior)
+            if self.ignore_lights:
+                self.agent.ignore_traffic_lights(True)
         self.agent.set_destination(goal)
 
     def step(self, ego):
@@ -216,11 +227,11 @@ class CarlaAgent:
         return control
 
 
-def make_agent(name):
+def make_agent(name, ignore_lights=False):
     if name == 'autopilot':
-        return AutopilotAgent()
+        return AutopilotAgent(ignore_lights)
     if name in ('basic', 'behavior'):
-        return CarlaAgent(name)
+        return CarlaAgent(name, ignore_lights=ignore_lights)
     raise ValueError("unknown agent '%s' (autopilot, basic, behavior)" % name)
 
 

@@ -49,13 +49,14 @@ const char* CommandName(const CommandBody& body) {
           [](const cmd::MoveToZ&) { return "move_to_z"; },
           [](const cmd::MoveByRollPitchYawrateZ&) { return "move_by_roll_pitch_yawrate_z"; },
           [](const cmd::SetKinematics&) { return "set_kinematics"; },
+          [](const cmd::SetApiControl&) { return "set_api_control"; },
       },
       body);
 }
 
 bool IsMotionCommand(const CommandBody& body) {
   return !(std::holds_alternative<cmd::Arm>(body) || std::holds_alternative<cmd::Disarm>(body) ||
-           std::holds_alternative<cmd::SetGains>(body));
+           std::holds_alternative<cmd::SetGains>(body) || std::holds_alternative<cmd::SetApiControl>(body));
 }
 
 }  // namespace lockstep::air

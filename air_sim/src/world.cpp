@@ -94,6 +94,7 @@ std::string ValidateBody(const DroneModel& dm, const DroneState& ds, const Comma
           [](const cmd::Arm&) { return std::string(); },
           [](const cmd::Disarm&) { return std::string(); },
           [](const cmd::Hover&) { return std::string(); },
+          [](const cmd::SetApiControl&) { return std::string(); },
           [&](const cmd::Takeoff& c) {
             std::string e = First({CheckRange("takeoff height", c.height, 0, 1000, "m"), CheckPositive("timeout", c.timeout)});
             // AirSim refuses a takeoff while the drone moves (relative to what it stands on).
@@ -313,11 +314,136 @@ Vec3 BodyToWorldHeading(const Vec3& v, double yaw) {
   return Vec3(c * v.x() - s * v.y(), s * v.x() + c * v.y(), v.z());
 }
 
+// How a command AirSim waits out ends when it steers nothing (no API control); kDuration with
+// end 0 = it ends at once (Hover, a goal the drone is at already).
+std::pair<DroneState::Unsteered::Ends, double> UnsteeredEnd(const DroneState& ds, const CommandBody& body) {
+  using E = DroneState::Unsteered::Ends;
+  auto at = [&](const Vec3& goal) { return (goal - ds.position).norm() < 1e-6; };
+  return std::visit(
+      Overloaded{
+          [](const cmd::Takeoff& k) { return std::pair{E::kTimeout, k.timeout}; },
+          [](const cmd::Land& k) { return std::pair{E::kLand, k.timeout}; },
+          [&](const cmd::GoHome& k) { return std::pair{E::kTimeout, k.timeout}; },
+          [&](const cmd::MoveToPosition& k) { return at(k.position) ? std::pair{E::kDuration, 0.0} : std::pair{E::kTimeout, k.timeout}; },
+          [&](const cmd::MoveToZ& k) {
+            return at(Vec3(ds.position.x(), ds.position.y(), k.z)) ? std::pair{E::kDuration, 0.0} : std::pair{E::kTimeout, k.timeout};
+          },
+          [&](const cmd::MoveOnPath& k) {
+            const bool here = std::all_of(k.path.begin(), k.path.end(), at);
+            return here ? std::pair{E::kDuration, 0.0} : std::pair{E::kTimeout, k.timeout};
+          },
+          [&](const cmd::RotateToYaw& k) {
+            const double yaw_rate = (ds.orientation * ds.angular_velocity).z();
+            const bool there = std::abs(WrapAngle(k.yaw - YawOf(ds.orientation))) <= k.margin && std::abs(yaw_rate) <= kYawStillRate;
+            return there ? std::pair{E::kDuration, 0.0} : std::pair{E::kTimeout, k.timeout};
+          },
+          [](const cmd::TrackTarget& k) { return std::pair{E::kDuration, k.duration}; },
+          [](const cmd::MoveByVelocity& k) { return std::pair{E::kDuration, k.duration}; },
+          [](const cmd::MoveByVelocityZ& k) { return std::pair{E::kDuration, k.duration}; },
+          [](const cmd::MoveByRollPitchYawThrottle& k) { return std::pair{E::kDuration, k.duration}; },
+          [](const cmd::MoveByRollPitchYawZ& k) { return std::pair{E::kDuration, k.duration}; },
+          [](const cmd::MoveByRollPitchYawrateThrottle& k) { return std::pair{E::kDuration, k.duration}; },
+          [](const cmd::MoveByRollPitchYawrateZ& k) { return std::pair{E::kDuration, k.duration}; },
+          [](const cmd::MoveByAngleRatesThrottle& k) { return std::pair{E::kDuration, k.duration}; },
+          [](const cmd::MoveByAngleRatesZ& k) { return std::pair{E::kDuration, k.duration}; },
+          [](const cmd::MoveByMotorPwms& k) { return std::pair{E::kDuration, k.duration}; },
+          [](const cmd::RotateByYawRate& k) { return std::pair{E::kDuration, k.duration}; },
+          [](const auto&) { return std::pair{E::kDuration, 0.0}; },  // Hover; the rest never get here
+      },
+      body);
+}
+
+void FinishUnsteered(Ctx& c, CommandStatus st, double t, std::string msg = {}) {
+  DroneState::Unsteered& u = c.ds.unsteered;
+  if (u.running) Report(c, u.id, st, t, std::move(msg));
+  u.running = false;
+}
+
+// A motion command without API control (simple_flight's setGoalAndMode refuses it): it
+// replaces the running command, as AirSim's SingleTaskCall, and steers nothing.
+void StartUnsteered(Ctx& c, const Command& cm, double t) {
+  DroneState& ds = c.ds;
+  const std::string by = std::string("replaced by ") + CommandName(cm.body) + " (command " + std::to_string(cm.id) + ")";
+  Finish(c, CommandStatus::kCancelled, t, by);
+  FinishUnsteered(c, CommandStatus::kCancelled, t, by);
+  const auto [ends, span] = UnsteeredEnd(ds, cm.body);
+  Report(c, cm.id, CommandStatus::kRunning, t, "no API control: the command does not steer the drone");
+  DroneState::Unsteered& u = ds.unsteered;
+  u.id = cm.id;
+  u.running = true;
+  u.ends = ends;
+  u.end_time = t + span;
+  u.still_since = -1;
+  if (ends == DroneState::Unsteered::Ends::kDuration && span <= 0) FinishUnsteered(c, CommandStatus::kCompleted, t);
+}
+
+// enableApiControl(true / false). Released, the running command goes on unsteered (AirSim's
+// waiter runs on) and the drone gets simple_flight's goal without an RC: zero throttle.
+void SetApiControl(Ctx& c, bool enable, double t) {
+  DroneState& ds = c.ds;
+  if (enable == ds.api_control) return;
+  ds.api_control = enable;
+  if (enable) return;
+  ActiveCommand& ac = ds.command;
+  if (ac.running) {
+    using E = DroneState::Unsteered::Ends;
+    DroneState::Unsteered& u = ds.unsteered;
+    u.id = ac.id;
+    u.running = true;
+    u.ends = ac.mode == CommandMode::kLand ? E::kLand
+             : (ac.mode == CommandMode::kTakeoff || ac.mode == CommandMode::kPath || ac.mode == CommandMode::kRotateToYaw)
+                 ? E::kTimeout
+                 : E::kDuration;
+    u.end_time = ac.end_time;
+    u.still_since = -1;
+    ac.running = false;
+  }
+  (void)t;
+  ac.mode = CommandMode::kIdle;
+}
+
+// After a sub-step ending at t_end: an unsteered command's end.
+void CheckUnsteered(Ctx& c, double t_end) {
+  DroneState::Unsteered& u = c.ds.unsteered;
+  if (!u.running) return;
+  if (u.ends == DroneState::Unsteered::Ends::kLand) {
+    // AirSim's land(): done after more than 10 command periods with a NED z velocity <= 0.05 m/s.
+    if (c.ds.velocity.z() >= -kLandStillSpeed) {
+      if (u.still_since < 0) u.still_since = t_end;
+      if (t_end - u.still_since >= kLandStillTime - 1e-9) {
+        FinishUnsteered(c, CommandStatus::kCompleted, t_end);
+        return;
+      }
+    } else {
+      u.still_since = -1;
+    }
+  }
+  if (t_end < u.end_time - 1e-9) return;
+  if (u.ends == DroneState::Unsteered::Ends::kDuration) {
+    FinishUnsteered(c, CommandStatus::kCompleted, t_end);
+  } else {
+    FinishUnsteered(c, CommandStatus::kTimedOut, t_end, "timeout without API control (the command did not steer the drone)");
+  }
+}
+
 void ApplyCommand(Ctx& c, const Command& cm, double t) {
   DroneState& ds = c.ds;
   const MultirotorParams& p = c.dm.params;
   ActiveCommand& ac = ds.command;
   const double yaw_now = YawOf(ds.orientation);
+  if (const auto* api = std::get_if<cmd::SetApiControl>(&cm.body)) {
+    SetApiControl(c, api->enable, t);
+    Report(c, cm.id, CommandStatus::kCompleted, t);
+    return;
+  }
+  if (!ds.api_control && NeedsArmed(cm.body)) {
+    StartUnsteered(c, cm, t);
+    return;
+  }
+  if (IsMotionCommand(cm.body) && ds.unsteered.running) {
+    FinishUnsteered(c, CommandStatus::kCancelled, t, std::string("replaced by ") + CommandName(cm.body) + " (command " +
+                                                         std::to_string(cm.id) + ")");
+  }
   if (IsMotionCommand(cm.body) || std::holds_alternative<cmd::Disarm>(cm.body)) {
     if (ac.running) {
       Finish(c, CommandStatus::kCancelled, t,
@@ -354,6 +480,7 @@ void ApplyCommand(Ctx& c, const Command& cm, double t) {
             ds.controller.gains = g.gains;
             immediate();
           },
+          [&](const cmd::SetApiControl&) { immediate(); },
           [&](const cmd::Hover&) {
             if (ds.armed) EnterHold(ds, ds.position);
             immediate();
@@ -783,7 +910,15 @@ std::string ValidateCommand(const World& model, const WorldState& state, const C
   const std::string who = "command " + std::to_string(c.id) + " (" + CommandName(c.body) + ") for drone " +
                           std::to_string(c.drone) + ": ";
   if (dm == nullptr || ds == nullptr) return who + "unknown drone id";
-  if (NeedsArmed(c.body) && !ds->armed) return who + "drone is disarmed; arm it first";
+  // simple_flight's arm() / disarm() without API control (armDisarm returns False).
+  if (!ds->api_control && std::holds_alternative<cmd::Arm>(c.body)) {
+    return who + "Vehicle cannot be armed via API because API has not been given control";
+  }
+  if (!ds->api_control && std::holds_alternative<cmd::Disarm>(c.body)) {
+    return who + "Vehicle cannot be disarmed via API because API has not been given control";
+  }
+  // Without API control a motion command steers nothing, armed or not (StartUnsteered).
+  if (NeedsArmed(c.body) && ds->api_control && !ds->armed) return who + "drone is disarmed; arm it first";
   std::string e = ValidateBody(*dm, *ds, c.body);
   return e.empty() ? e : who + e;
 }
@@ -849,6 +984,7 @@ void Step(const World& model, WorldState* state, const Commands& commands, const
         ds.command.mode = CommandMode::kIdle;
       }
       CheckDeadline(ctx, t + h);
+      CheckUnsteered(ctx, t + h);
     }
   }
   state->time = t0 + dt;
@@ -910,6 +1046,12 @@ std::uint64_t StateHash(const WorldState& state) {
       mixd(r.signal);
     }
     mixb(d.armed);
+    mixb(d.api_control);
+    mix(&d.unsteered.id, sizeof d.unsteered.id);
+    mixb(d.unsteered.running);
+    mix(&d.unsteered.ends, sizeof d.unsteered.ends);
+    mixd(d.unsteered.end_time);
+    mixd(d.unsteered.still_since);
     mixb(d.grounded);
     mix(&d.carrier, sizeof d.carrier);
     mixv(d.carrier_offset);

@@ -308,5 +308,83 @@ TEST(air_world, BothDronesSeeTheirContactAtTheSameSubStep) {
   EXPECT_GT(sim.D(1).velocity.x(), 0.5) << "the hovering drone was pushed";
 }
 
+
+// AirSim's rules without API control (simple_flight refuses the goals; MultirotorApiBase's
+// waiters run on): arm and disarm are refused, a move steers nothing and ends with its
+// duration (COMPLETED) or its timeout (TIMED_OUT), land completes when the drone does not
+// descend, and releasing control in flight leaves the drone to zero throttle.
+TEST(air_world, WithoutApiControlCommandsSteerNothingAndRunOutTheirTime) {
+  Sim sim;
+  sim.Add(1);
+  sim.Run(0.5);
+  const Vec3 rest = sim.D(1).position;
+  EXPECT_TRUE(sim.D(1).api_control);  // Lockstep's own commands find it on
+  sim.Send(1, cmd::SetApiControl{false});
+  const CommandId arm = sim.Send(1, cmd::Arm{});
+  sim.Tick();
+  EXPECT_FALSE(sim.D(1).api_control);
+  EXPECT_EQ(sim.Status(arm), CommandStatus::kRejected);
+  EXPECT_NE(sim.last_report[arm].message.find("API has not been given control"), std::string::npos);
+  EXPECT_FALSE(sim.D(1).armed);
+  // A timed move: accepted (disarmed or not), RUNNING for its duration, then COMPLETED; no motion.
+  const CommandId v = sim.Send(1, cmd::MoveByVelocity{Vec3(2, 0, 1), 1.0});
+  sim.Tick();
+  EXPECT_EQ(sim.Status(v), CommandStatus::kRunning);
+  sim.Run(0.9);
+  EXPECT_EQ(sim.Status(v), CommandStatus::kRunning);
+  sim.Run(0.15);
+  EXPECT_EQ(sim.Status(v), CommandStatus::kCompleted);
+  EXPECT_NEAR(sim.last_report[v].time, 1.55, 1e-9);  // started at 0.55 s (the tick after 0.5 s)
+  // A goal: never reached, TIMED_OUT at its timeout; a newer command cancels a running one.
+  const CommandId m = sim.Send(1, cmd::MoveToPosition{rest + Vec3(10, 0, 3), 3.0, 2.0});
+  sim.Run(1.0);
+  EXPECT_EQ(sim.Status(m), CommandStatus::kRunning);
+  sim.Run(1.05);
+  EXPECT_EQ(sim.Status(m), CommandStatus::kTimedOut);
+  const CommandId t = sim.Send(1, cmd::Takeoff{0, 5.0});
+  sim.Tick();
+  const CommandId l = sim.Send(1, cmd::Land{60});
+  sim.Tick();
+  EXPECT_EQ(sim.Status(t), CommandStatus::kCancelled);
+  // Land: AirSim's "not descending for more than 10 command periods" holds at once on the ground.
+  sim.Run(0.3);
+  EXPECT_EQ(sim.Status(l), CommandStatus::kCompleted);
+  const CommandId h = sim.Send(1, cmd::Hover{});
+  sim.Tick();
+  EXPECT_EQ(sim.Status(h), CommandStatus::kCompleted);
+  EXPECT_LT((sim.D(1).position - rest).norm(), 1e-3) << "a command without API control moved the drone";
+  // Taken back, the drone flies again.
+  sim.Send(1, cmd::SetApiControl{true});
+  sim.Send(1, cmd::Arm{});
+  const CommandId up = sim.Send(1, cmd::Takeoff{});
+  ASSERT_TRUE(sim.RunUntil([&] { return sim.Done(up); }, 10));
+  EXPECT_EQ(sim.Status(up), CommandStatus::kCompleted);
+  // Released in flight: the running move goes on unsteered to its timeout and the drone gets
+  // simple_flight's goal without an RC (zero throttle): it falls.
+  const double z = sim.D(1).position.z();
+  const CommandId far = sim.Send(1, cmd::MoveToPosition{sim.D(1).position + Vec3(0, 20, 0), 2.0, 3.0});
+  sim.Tick();
+  sim.Send(1, cmd::SetApiControl{false});
+  sim.Run(0.5);
+  EXPECT_EQ(sim.Status(far), CommandStatus::kRunning);
+  EXPECT_LT(sim.D(1).position.z(), z - 0.3);
+  EXPECT_LT(sim.D(1).velocity.z(), -1.0);
+  ASSERT_TRUE(sim.RunUntil([&] { return sim.Done(far); }, 4));
+  EXPECT_EQ(sim.Status(far), CommandStatus::kTimedOut);
+}
+
+TEST(air_world, ApiControlIsPartOfTheStateHash) {
+  Sim a, b;
+  a.Add(1);
+  b.Add(1);
+  a.Tick();
+  b.Tick();
+  ASSERT_EQ(StateHash(a.state), StateHash(b.state));
+  b.Send(1, cmd::SetApiControl{false});
+  a.Tick();
+  b.Tick();
+  EXPECT_NE(StateHash(a.state), StateHash(b.state));
+}
+
 }  // namespace
 }  // namespace lockstep::air

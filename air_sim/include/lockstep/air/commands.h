@@ -151,6 +151,14 @@ struct SetKinematics {           // simSetKinematics: pose and velocities at onc
   Vec3 velocity = Vec3::Zero();          // m/s, world ENU
   Vec3 angular_velocity = Vec3::Zero();  // rad/s, body FLU
 };
+// AirSim's enableApiControl: the vehicle's, whoever asks. Without API control a motion
+// command is accepted but does not steer the drone (simple_flight refuses its goal): it runs
+// its duration (COMPLETED) or its timeout (TIMED_OUT), as AirSim's call waits them out; arm
+// and disarm are rejected. Releasing control in flight leaves the drone to simple_flight's
+// goal without an RC: zero throttle (it falls), its running command unsteered.
+struct SetApiControl {
+  bool enable = true;
+};
 }  // namespace cmd
 
 using CommandBody =
@@ -160,7 +168,7 @@ using CommandBody =
                  cmd::MoveByRollPitchYawrateThrottle, cmd::MoveByAngleRatesThrottle,
                  cmd::MoveByAngleRatesZ, cmd::MoveByMotorPwms, cmd::RotateToYaw,
                  cmd::RotateByYawRate, cmd::SetGains, cmd::SetPose, cmd::MoveToZ,
-                 cmd::MoveByRollPitchYawrateZ, cmd::SetKinematics>;
+                 cmd::MoveByRollPitchYawrateZ, cmd::SetKinematics, cmd::SetApiControl>;
 
 struct Command {
   CommandId id = 0;   // chosen by the caller (the coordinator); echoed in reports

@@ -121,6 +121,18 @@ struct DroneState {
   std::array<RotorState, kMaxRotors> rotors{};  // first RotorCount(frame) used
   double total_thrust = 0;               // N, sum over rotors
   bool armed = false;
+  bool api_control = true;               // AirSim API control (cmd::SetApiControl); Lockstep's own
+                                         // commands find it on, the airsim clients spawn without it
+  // A motion command accepted without API control: it steers nothing and ends as AirSim's
+  // call does, after its duration (COMPLETED) or its timeout (TIMED_OUT); Land completes once
+  // the drone does not descend (<= 0.05 m/s) for 0.22 s, Hover and a goal already reached at once.
+  struct Unsteered {
+    CommandId id = 0;
+    bool running = false;
+    enum class Ends : std::uint8_t { kDuration, kTimeout, kLand } ends = Ends::kDuration;
+    double end_time = 0;                 // s
+    double still_since = -1;             // s, kLand: when the drone stopped descending
+  } unsteered;
   LandedState landed = LandedState::kLanded;
   bool grounded = false;                 // AirSim ground lock: levelled, moving with the surface
                                          // under it, until thrust exceeds weight

@@ -59,14 +59,16 @@ def agents_path():
 
 
 class Simulation:
-    """`lockstep up` with ground_sim and sensors (render too when `cameras`), synchronous at
-    `dt`, on a DDS domain; stopped by stop()."""
+    """`lockstep up` with ground_sim and sensors (render too when `cameras`, air_sim when
+    `air`), synchronous at `dt`, on a DDS domain; stopped by stop()."""
 
-    def __init__(self, town, domain, out_dir, dt=0.1, seed=0, cameras=False, timeout=120):
+    def __init__(self, town, domain, out_dir, dt=0.1, seed=0, cameras=False, air=False, timeout=120):
         self.domain = domain
         bin_dir = os.path.join(build_dir(), 'bin')
         services = []
-        for kind, perception in (('ground_sim', False), ('sensors', True)) + ((('render', True),) if cameras else ()):
+        kinds = (('ground_sim', False), ('sensors', True)) + ((('render', True),) if cameras else ()) + \
+            ((('air_sim', False),) if air else ())
+        for kind, perception in kinds:
             if not os.path.exists(os.path.join(bin_dir, 'lockstep_' + kind)):
                 raise RuntimeError('lockstep_%s is not built (cmake --build build --target lockstep_%s)' % (kind, kind))
             services.append('  - {name: %s, kind: %s, perception: %s}' % (kind, kind, 'true' if perception else 'false'))

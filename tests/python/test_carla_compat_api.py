@@ -113,12 +113,11 @@ def test_walker_pose_types_exist():
 
 
 def test_traffic_manager_calls_of_carla_exist():
-    tm = carla.TrafficManager.__new__(carla.TrafficManager)
-    for name, args in (('vehicle_lane_offset', (None, 0.5)), ('global_lane_offset', (0.5,)),
-                       ('collision_detection', (None, None, False)),
-                       ('set_boundaries_respawn_dormant_vehicles', (25.0, 70.0))):
-        with pytest.raises(carla.LockstepUnsupported, match=r'TrafficManager\.%s is not supported' % name):
-            getattr(tm, name)(*args)
+    # Implemented (python.traffic_manager runs them against ground_sim): not the fallback.
+    for name in ('vehicle_lane_offset', 'global_lane_offset', 'collision_detection',
+                 'set_boundaries_respawn_dormant_vehicles'):
+        assert name in carla.TrafficManager.__dict__
+        assert 'Not supported' not in (getattr(carla.TrafficManager, name).__doc__ or '')
     sensor = carla.Sensor.__new__(carla.Sensor)
     sensor.enable_gbuffers(True)  # tutorial_gbuffer.py: implemented (gbuffer.py, python.carla_conventions)
     # A fallback never replaces an implementation.

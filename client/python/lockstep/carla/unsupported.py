@@ -34,11 +34,6 @@ add_unsupported(Map, {
 add_unsupported(TrafficManager, {
     'get_next_action': "the Traffic Manager's plans are not on the wire",
     'get_all_actions': "the Traffic Manager's plans are not on the wire",
-    'vehicle_lane_offset': "ground_sim's Traffic Manager does not apply lane offsets yet (TM_LANE_OFFSET is on the wire)",
-    'global_lane_offset': "ground_sim's Traffic Manager does not apply lane offsets yet (TM_LANE_OFFSET is on the wire)",
-    'collision_detection': "ground_sim's Traffic Manager always avoids every actor (TM_COLLISION_DETECTION is on the "
-                           'wire, not applied yet)',
-    'set_boundaries_respawn_dormant_vehicles': "ground_sim's Traffic Manager does not take respawn boundaries yet",
 })
 add_unsupported(Client, {
     'set_files_base_folder': 'there are no server-side asset files',

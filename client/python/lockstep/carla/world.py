@@ -890,6 +890,27 @@ class TrafficManager:
         """'Left' / 'Right' / 'Straight' at the next junctions, as CARLA."""
         self._set('set_route', 0, actor, 'set_route', route=[str(r) for r in path])
 
+    def vehicle_lane_offset(self, actor, offset):
+        """m from the lane centre, > 0 right (CARLA's sign); overrides global_lane_offset."""
+        self._set('lane_offset', offset, actor, 'vehicle_lane_offset')
+
+    def global_lane_offset(self, offset):
+        """m from the lane centre for every vehicle without its own, > 0 right (CARLA's sign)."""
+        self._set('lane_offset', offset, call='global_lane_offset')
+
+    def collision_detection(self, reference_actor, other_actor, detect_collision):
+        """False: the Traffic Manager's reference_actor ignores other_actor (one way), as CARLA's."""
+        self._set('collision_detection', 1 if detect_collision else 0, reference_actor, 'collision_detection',
+                  other_actor=other_actor.id)
+
+    def set_boundaries_respawn_dormant_vehicles(self, lower_bound=25.0, upper_bound=None):
+        """m from the hero where dormant vehicles respawn; ground_sim clamps them to
+        [20 m, actor_active_distance] as CARLA's (upper_bound None: actor_active_distance)."""
+        if upper_bound is None:
+            upper_bound = 2000.0
+        self._set('respawn_boundaries', lower_bound, call='set_boundaries_respawn_dormant_vehicles',
+                  value2=float(upper_bound))
+
     def update_vehicle_lights(self, actor, do_update):
         """While it drives the vehicle, the TM sets its position lights and low beams from the
         sun, heavy rain and fog, fog lights in fog, and brake lights on a hard brake (CARLA's

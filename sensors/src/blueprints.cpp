@@ -1,5 +1,6 @@
 #include "lockstep/sensors/blueprints.h"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <sstream>
@@ -21,6 +22,12 @@ AttributeSpec I(const std::string& id, int64_t def, double min, double max) {
 }
 AttributeSpec B(const std::string& id, bool def) { return {id, AttrType::kBool, def ? "true" : "false"}; }
 AttributeSpec S(const std::string& id, const std::string& def) { return {id, AttrType::kString, def}; }
+// A string restricted to `choices`; the default is the first (CARLA's first recommended value).
+AttributeSpec Choice(const std::string& id, std::vector<std::string> choices) {
+  AttributeSpec a{id, AttrType::kString, choices.front()};
+  a.choices = std::move(choices);
+  return a;
+}
 
 // Every sensor: role_name, and sensor_tick (s between samples, 0 = every frame).
 std::vector<AttributeSpec> Common(std::vector<AttributeSpec> more, bool ticked = true) {
@@ -28,6 +35,36 @@ std::vector<AttributeSpec> Common(std::vector<AttributeSpec> more, bool ticked =
   if (ticked) v.push_back(F("sensor_tick", 0.0, 0, 3600));
   v.insert(v.end(), more.begin(), more.end());
   return v;
+}
+
+// CARLA 0.9.16's V2X radio (UActorBlueprintFunctionLibrary::MakeV2XDefinition /
+// MakeCustomV2XDefinition): the path-loss model's attributes, in CARLA's order.
+std::vector<AttributeSpec> V2XRadio() {
+  return {I("noise_seed", 0, 0, 4294967295.0),
+          F("transmit_power", 21.5, -1e3, 1e3),
+          F("receiver_sensitivity", -99.0, -1e3, 1e3),
+          F("frequency_ghz", 5.9, 1e-3, 1e3),
+          F("combined_antenna_gain", 10.0, -1e3, 1e3),
+          Choice("scenario", {"highway", "rural", "urban"}),
+          Choice("path_loss_model", {"winner", "geometric"}),
+          F("path_loss_exponent", 2.7, 0, 100),
+          F("d_ref", 1.0, 1e-6, 1e6),
+          F("filter_distance", 500.0, 0, 1e7),
+          B("use_etsi_fading", true),
+          F("custom_fading_stddev", 0.0, 0, 1e3)};
+}
+
+std::vector<AttributeSpec> V2XAttributes() {
+  std::vector<AttributeSpec> v = V2XRadio();
+  for (auto a : {F("gen_cam_min", 0.1, 0, 3600), F("gen_cam_max", 1.0, 0, 3600), B("fixed_rate", false),
+                 F("noise_lat_stddev", 0.0, 0, 90), F("noise_lat_bias", 0.0, -90, 90), F("noise_lon_stddev", 0.0, 0, 180),
+                 F("noise_lon_bias", 0.0, -180, 180), F("noise_alt_stddev", 0.0, 0, 1e6), F("noise_alt_bias", 0.0, -1e6, 1e6),
+                 F("noise_head_stddev", 0.0, 0, 360), F("noise_head_bias", 0.0, -360, 360), F("noise_accel_stddev_x", 0.0, 0, 1e3),
+                 F("noise_accel_stddev_y", 0.0, 0, 1e3), F("noise_accel_stddev_z", 0.0, 0, 1e3),
+                 F("noise_yawrate_stddev", 0.0, 0, 1e3), F("noise_yawrate_bias", 0.0, -1e3, 1e3), F("noise_vel_stddev_x", 0.0, 0, 1e3)}) {
+    v.push_back(a);
+  }
+  return Common(v);
 }
 
 std::vector<AttributeSpec> LidarAttributes(bool semantic) {
@@ -77,6 +114,8 @@ std::vector<SensorBlueprint> Build() {
        Common({F("distance", 5.0, 0, 1e4), F("hit_radius", 0.5, 0, 100), B("only_dynamics", false), B("debug_linetrace", false)})},
       {"sensor.other.collision", SensorType::kCollision, Common({}, false)},
       {"sensor.other.lane_invasion", SensorType::kLaneInvasion, Common({}, false)},
+      {"sensor.other.v2x", SensorType::kV2X, V2XAttributes()},
+      {"sensor.other.v2x_custom", SensorType::kCustomV2X, Common(V2XRadio())},
   };
 }
 
@@ -100,7 +139,12 @@ std::string CheckValue(const AttributeSpec& a, const std::string& v) {
   auto bad = [&](const std::string& why) { return "attribute '" + a.id + "' (" + TypeName(a.type) + "): " + why + ", got '" + v + "'"; };
   double x = 0;
   switch (a.type) {
-    case AttrType::kString: return {};
+    case AttrType::kString: {
+      if (a.choices.empty() || std::find(a.choices.begin(), a.choices.end(), v) != a.choices.end()) return {};
+      std::string list;
+      for (const auto& c : a.choices) list += (list.empty() ? "" : ", ") + c;
+      return bad("expected one of " + list);
+    }
     case AttrType::kBool:
       return v == "true" || v == "false" || v == "True" || v == "False" ? std::string() : bad("expected true or false");
     case AttrType::kInt:

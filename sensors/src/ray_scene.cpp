@@ -2,6 +2,7 @@
 
 #include <embree3/rtcore.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <stdexcept>
@@ -16,6 +17,7 @@ constexpr unsigned kInvalid = RTC_INVALID_GEOMETRY_ID;
 struct StaticInfo {
   uint8_t tag = 0;
   uint32_t instance_id = 0;
+  uint32_t geometry = 0;  // index among the town's meshes + 1
   HitKind kind = HitKind::kStatic;
 };
 
@@ -94,7 +96,8 @@ struct RayScene::Impl {
     rtcSetSceneBuildQuality(town, RTC_BUILD_QUALITY_HIGH);
     statics.clear();
     town_triangles = 0;
-    for (const auto& m : meshes) {
+    for (size_t mesh_index = 0; mesh_index < meshes.size(); ++mesh_index) {
+      const auto& m = meshes[mesh_index];
       if (m.TriangleCount() == 0) continue;
       RTCGeometry g = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
       auto* v = static_cast<float*>(
@@ -107,7 +110,7 @@ struct RayScene::Impl {
       const unsigned id = rtcAttachGeometry(town, g);
       rtcReleaseGeometry(g);
       if (statics.size() <= id) statics.resize(id + 1);
-      statics[id] = StaticInfo{m.semantic_tag, m.instance_id,
+      statics[id] = StaticInfo{m.semantic_tag, m.instance_id, static_cast<uint32_t>(mesh_index + 1),
                                m.semantic_tag == map::semantic::kGround || m.semantic_tag == map::semantic::kRoads ||
                                        m.semantic_tag == map::semantic::kTerrain || m.semantic_tag == map::semantic::kRoadLine ||
                                        m.semantic_tag == map::semantic::kSideWalks
@@ -180,6 +183,7 @@ struct RayScene::Impl {
       const StaticInfo& s = statics[geom_id];
       out->tag = s.tag;
       out->instance_id = s.instance_id;
+      out->geometry = s.geometry;
       out->kind = s.kind;
       const float len = std::sqrt(nx * nx + ny * ny + nz * nz);
       out->normal[0] = nx / len;
@@ -264,6 +268,38 @@ Hit RayScene::Intersect(const Ray& ray) const {
   Hit h;
   if (rh.hit.geomID != kInvalid) impl_->Decode(rh.hit.instID[0], rh.hit.geomID, rh.ray.tfar, rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z, &h);
   return h;
+}
+
+std::vector<Hit> RayScene::IntersectAll(const Vec3& from, const Vec3& to, size_t max_hits) const {
+  std::vector<Hit> out;
+  const Vec3 d = to - from;
+  const double length = d.norm();
+  if (!(length > 0) || !std::isfinite(length)) return out;
+  const Vec3 dir = d / length;
+  // March along the segment: each hit found restarts the ray just behind it. An object
+  // already reported (an actor's box exit face, a mesh hit again further on) is passed.
+  double travelled = 0;
+  for (size_t guard = 0; guard < 4 * max_hits + 16 && out.size() < max_hits; ++guard) {
+    Ray r;
+    const Vec3 o = from + dir * travelled;
+    for (int a = 0; a < 3; ++a) {
+      r.origin[a] = static_cast<float>(o[a]);
+      r.dir[a] = static_cast<float>(dir[a]);
+    }
+    r.tfar = static_cast<float>(length - travelled);
+    if (r.tfar <= 0) break;
+    Hit h = Intersect(r);
+    if (!h.hit()) break;
+    const double at = travelled + h.distance;
+    travelled = at + 1e-3;
+    const bool seen = std::any_of(out.begin(), out.end(), [&](const Hit& e) {
+      return h.geometry ? e.geometry == h.geometry : (e.geometry == 0 && e.actor == h.actor);
+    });
+    if (seen) continue;
+    h.distance = static_cast<float>(at);
+    out.push_back(h);
+  }
+  return out;
 }
 
 }  // namespace lockstep::sensors

@@ -1,18 +1,33 @@
 #include "lockstep/sensors/sensor_world.h"
 
 #include <cmath>
+#include <map>
+#include <optional>
 #include <variant>
 
 namespace lockstep::sensors {
 
 size_t StepOutput::size() const {
   return point_clouds.size() + radar.size() + imu.size() + gnss.size() + barometer.size() + magnetometer.size() +
-         distance.size() + obstacle.size() + collision.size() + lane_invasion.size();
+         distance.size() + obstacle.size() + collision.size() + lane_invasion.size() + v2x.size();
 }
 
 namespace {
 
-using Model = std::variant<std::monostate, Lidar, Radar, Imu, Gnss, Barometer, Magnetometer, DistanceSensor, ObstacleDetector>;
+// A V2X sensor: its radio, its CA service (sensor.other.v2x) or the text waiting to be sent
+// (sensor.other.v2x_custom), and its own random stream (fading, CAM noise), as CARLA's.
+struct V2XRadio {
+  V2XRadio(const Attributes& a, bool custom, uint64_t seed) : radio(a), rng(seed) {
+    if (!custom) cam.emplace(a);
+  }
+  PathLoss radio;
+  std::optional<CaService> cam;
+  std::optional<std::string> pending;
+  Rng rng;
+  uint64_t Fingerprint() const { return rng.Fingerprint(); }
+};
+
+using Model = std::variant<std::monostate, Lidar, Radar, Imu, Gnss, Barometer, Magnetometer, DistanceSensor, ObstacleDetector, V2XRadio>;
 
 // Builds the model of a checked spawn.
 Model MakeModel(SensorType type, const Attributes& a, uint64_t seed) {
@@ -26,6 +41,8 @@ Model MakeModel(SensorType type, const Attributes& a, uint64_t seed) {
     case SensorType::kMagnetometer: return Magnetometer(a, seed);
     case SensorType::kDistance: return DistanceSensor(a, seed);
     case SensorType::kObstacle: return ObstacleDetector(a);
+    case SensorType::kV2X: return V2XRadio(a, false, seed);
+    case SensorType::kCustomV2X: return V2XRadio(a, true, seed);
     case SensorType::kCollision:
     case SensorType::kLaneInvasion: return std::monostate{};
   }
@@ -56,6 +73,8 @@ struct SensorWorld::Sensor {
   uint64_t next = 0;    // index of the next due sample: due at t0 + next * tick
   double last = 0;      // s, time of the last sample
   Model model;
+  bool placed = false;  // last_pose is set
+  Pose last_pose;       // world pose at the last step that found its parent
 
   // sensor_tick as CARLA's actor tick interval: sampled at the first frame, then at the
   // first frame at or after each multiple of sensor_tick (no drift, no doubling).
@@ -107,6 +126,14 @@ std::string SensorWorld::Add(const SensorSpawn& spawn) {
 
 bool SensorWorld::Remove(uint32_t id) { return sensors_.erase(id) > 0; }
 
+void SensorWorld::Detach(uint32_t parent) {
+  for (auto& [id, s] : sensors_) {
+    if (parent == 0 || s->spawn.parent != parent) continue;
+    s->spawn.parent = 0;
+    if (s->placed) s->spawn.transform = s->last_pose;
+  }
+}
+
 bool SensorWorld::HasEventSensors() const {
   for (const auto& [id, s] : sensors_) {
     if (s->type == SensorType::kCollision || s->type == SensorType::kLaneInvasion) return true;
@@ -121,20 +148,50 @@ bool SensorWorld::HasRaySensors() const {
       case SensorType::kSemanticLidar:
       case SensorType::kRadar:
       case SensorType::kDistance:
-      case SensorType::kObstacle: return true;
+      case SensorType::kObstacle:
+      case SensorType::kV2X:
+      case SensorType::kCustomV2X: return true;
       default: break;
     }
   }
   return false;
 }
 
+std::string SensorWorld::V2XSend(uint32_t sensor, const std::string& text) {
+  auto it = sensors_.find(sensor);
+  if (it == sensors_.end()) return "sensor " + std::to_string(sensor) + " is not simulated here";
+  if (it->second->type != SensorType::kCustomV2X) {
+    return "actor " + std::to_string(sensor) + " (" + it->second->spawn.blueprint + ") is not a sensor.other.v2x_custom";
+  }
+  if (text.size() > kCustomV2XMaxText) return "V2X message of " + std::to_string(text.size()) + " bytes (at most 1024)";
+  std::get<V2XRadio>(it->second->model).pending = text;
+  return {};
+}
+
 StepOutput SensorWorld::Step(const WorldFrame& frame, double dt, const FrameEvents& events) {
   StepOutput out;
   if (HasRaySensors()) scene_.SetActors(frame.actors);
+  struct DueV2X {
+    uint32_t id;
+    Sensor* sensor;
+    const Actor* parent;
+    Pose pose;
+  };
+  std::vector<DueV2X> v2x;
   for (auto& [id, s] : sensors_) {
     const SensorSpawn& sp = s->spawn;
     const Actor* parent = sp.parent ? frame.Find(sp.parent) : nullptr;
     if (sp.parent && !parent) continue;  // not in this frame (yet, or any more)
+    if (parent) {
+      s->last_pose = MountPose(*parent).Compose(sp.transform);
+      s->placed = true;
+    }
+    if (s->type == SensorType::kV2X || s->type == SensorType::kCustomV2X) {
+      // CARLA's V2X sensors act for their parent (GetOwner()); unattached ones do nothing.
+      double unused = 0;
+      if (parent && s->Due(frame.sim_time, dt, &unused)) v2x.push_back({id, s.get(), parent, MountPose(*parent).Compose(sp.transform)});
+      continue;
+    }
     if (s->type == SensorType::kCollision) {
       for (const auto& e : events.collisions) {
         if (parent && e.actor == sp.parent) out.collision.push_back({id, sp.parent, MountPose(*parent).Compose(sp.transform), CollisionSample{e}});
@@ -176,6 +233,42 @@ StepOutput SensorWorld::Step(const WorldFrame& frame, double dt, const FrameEven
           }
         },
         s->model);
+  }
+  // V2X, CARLA's two phases: every due sensor first makes what its parent sends this step
+  // (PrePhysTick: one message per parent and family, the lowest sensor id's), then each
+  // receives the others' through its path-loss model (PostPhysTick), senders in id order.
+  struct Sent {
+    uint32_t sensor;
+    double power;
+    std::vector<uint8_t> payload;
+  };
+  std::map<uint32_t, Sent> sent[2];  // [0] CAM, [1] custom; by parent id
+  for (auto& d : v2x) {
+    auto& m = std::get<V2XRadio>(d.sensor->model);
+    const bool custom = d.sensor->type == SensorType::kCustomV2X;
+    if (custom) {
+      if (!m.pending) continue;
+      sent[1].emplace(d.parent->id, Sent{d.id, m.radio.transmit_power(), PackCustom(static_cast<int32_t>(d.parent->id), *m.pending)});
+      m.pending.reset();
+    } else if (d.parent->kind == ActorKind::kVehicle) {
+      if (auto cam = m.cam->Trigger(*d.parent, frame.sim_time, dt, geo_, m.rng)) {
+        sent[0].emplace(d.parent->id, Sent{d.id, m.radio.transmit_power(), PackCam(*cam)});
+      }
+    }
+  }
+  for (auto& d : v2x) {
+    auto& m = std::get<V2XRadio>(d.sensor->model);
+    const auto& family = sent[d.sensor->type == SensorType::kCustomV2X ? 1 : 0];
+    std::vector<V2XMessage> got;
+    for (const auto& [owner, msg] : family) {
+      if (owner == d.parent->id) continue;
+      const Actor* sender = frame.Find(owner);
+      if (!sender) continue;
+      if (auto power = m.radio.Receive(scene_, *d.parent, *sender, msg.power, frame, m.rng)) {
+        got.push_back(V2XMessage{msg.sensor, *power, msg.payload});
+      }
+    }
+    if (!got.empty()) out.v2x.push_back({d.id, d.parent->id, d.pose, std::move(got)});
   }
   return out;
 }

@@ -301,6 +301,31 @@ TEST(Mount, AttachedSensorsSitOnTheBottomOfVehiclesAndWalkersAndTheCentreOfDrone
   EXPECT_NEAR((out.collision[0].pose.position - Vec3(10, 0, 0.05)).norm(), 0, 1e-12);
 }
 
+// CARLA destroys only the parent; Unreal detaches its sensors keeping their world
+// transform: they go on sampling where they were, standing still, unattached.
+TEST(Mount, SensorsOfADestroyedParentStayWhereTheyWere) {
+  SensorWorld w(1);
+  ASSERT_EQ(w.Add(Spawn(10, "sensor.other.imu", {}, 5, MakePose(1.5, 0, 2.4))), "");
+  ASSERT_EQ(w.Add(Spawn(11, "sensor.other.gnss", {}, 5, MakePose(0, 0, 1.7))), "");
+  Actor car = MakeActor(5, ActorKind::kVehicle, "vehicle.lockstep.sedan", MakePose(10, 0, 0.8, M_PI / 2), Vec3(2.3, 1, 0.75));
+  car.velocity = Vec3(0, 5, 0);
+  auto out = w.Step(Frame(1, kDt, {car}), kDt);
+  ASSERT_EQ(out.imu.size(), 1u);
+  const Pose imu_pose = out.imu[0].pose;
+  w.Remove(5);  // the car's own id: not a sensor
+  w.Detach(5);
+  for (int k = 2; k <= 3; ++k) {
+    out = w.Step(Frame(k, kDt), kDt);  // the car is gone from the frame
+    ASSERT_EQ(out.imu.size(), 1u) << "frame " << k;
+    ASSERT_EQ(out.gnss.size(), 1u);
+    EXPECT_EQ(out.imu[0].parent, 0u);
+    EXPECT_NEAR((out.imu[0].pose.position - imu_pose.position).norm(), 0, 1e-12);
+    EXPECT_NEAR((out.imu[0].pose.position - Vec3(10, 1.5, 0.05 + 2.4)).norm(), 0, 1e-12);
+    EXPECT_NEAR(out.imu[0].pose.orientation.angularDistance(imu_pose.orientation), 0, 1e-12);
+    EXPECT_NEAR((out.gnss[0].pose.position - Vec3(10, 0, 0.05 + 1.7)).norm(), 0, 1e-12);
+  }
+}
+
 TEST(SensorTick, PointOneSecondAtDtPointZeroFiveSamplesEverySecondFrame) {
   for (const char* bp : {"sensor.other.imu", "sensor.lidar.ray_cast", "sensor.other.gnss"}) {
     SensorWorld w(1);
@@ -416,7 +441,7 @@ TEST(Blueprints, CarlaDefaults) {
   EXPECT_DOUBLE_EQ(a.Float("distance"), 5);
   EXPECT_DOUBLE_EQ(a.Float("hit_radius"), 0.5);
   EXPECT_FALSE(a.Bool("only_dynamics"));
-  EXPECT_EQ(SensorBlueprints().size(), 11u);
+  EXPECT_EQ(SensorBlueprints().size(), 13u);  // with CARLA 0.9.16's sensor.other.v2x and v2x_custom
 }
 
 TEST(StateHash, ChangesWithTheSensorsState) {

@@ -18,10 +18,11 @@ struct AttributeSpec {
   std::string default_value;
   double min = -std::numeric_limits<double>::infinity();  // inclusive, int and float
   double max = std::numeric_limits<double>::infinity();
+  std::vector<std::string> choices = {};  // strings: the only values accepted (CARLA's restricted recommended values); empty = any
 };
 
 enum class SensorType { kLidar, kSemanticLidar, kRadar, kImu, kGnss, kBarometer, kMagnetometer, kDistance, kObstacle,
-                        kCollision, kLaneInvasion };
+                        kCollision, kLaneInvasion, kV2X, kCustomV2X };
 
 struct SensorBlueprint {
   std::string id;                 // e.g. "sensor.lidar.ray_cast"

@@ -23,6 +23,7 @@ struct Hit {
   float normal[3] = {0, 0, 0};    // world, unit, geometric
   uint32_t actor = 0;             // actor id when an actor was hit
   uint32_t instance_id = 0;       // static mesh instance id (map layer) when the town was hit
+  uint32_t geometry = 0;          // which static mesh was hit (its index among the town's meshes, + 1); 0 = an actor
   uint8_t tag = 0;                // CARLA semantic tag
   HitKind kind = HitKind::kNone;
   bool hit() const { return distance >= 0; }
@@ -64,6 +65,12 @@ class RayScene {
     }
     return Hit{};
   }
+
+  // Every object the segment from -> to crosses, nearest first, each object once (its
+  // first surface along the segment: an actor's box once, a town mesh once), as Unreal's
+  // multi line traces report them (CARLA's World.cast_ray, the V2X path-loss trace).
+  // Hit.distance is from `from`. At most `max_hits` objects.
+  std::vector<Hit> IntersectAll(const Vec3& from, const Vec3& to, size_t max_hits = 256) const;
 
   size_t static_triangles() const;
   size_t actor_count() const;

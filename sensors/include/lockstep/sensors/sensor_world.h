@@ -13,6 +13,7 @@
 #include "lockstep/sensors/models.h"
 #include "lockstep/sensors/ray_scene.h"
 #include "lockstep/sensors/types.h"
+#include "lockstep/sensors/v2x.h"
 
 namespace lockstep::sensors {
 
@@ -51,6 +52,8 @@ struct StepOutput {
   std::vector<Tagged<ObstacleSample>> obstacle;
   std::vector<Tagged<CollisionSample>> collision;
   std::vector<Tagged<LaneInvasionSample>> lane_invasion;
+  // V2X sensors: what each received this step (only sensors that received something).
+  std::vector<Tagged<std::vector<V2XMessage>>> v2x;
   size_t size() const;
 };
 
@@ -72,10 +75,17 @@ class SensorWorld {
   // Adds a sensor: empty on success, else the reason (bad blueprint or attribute).
   std::string Add(const SensorSpawn& spawn);
   bool Remove(uint32_t id);
+  // The actor `parent` was destroyed: as CARLA's (only the actor goes; Unreal detaches what
+  // was attached, keeping its world transform) its sensors stay, unattached, at their world
+  // pose of the last step that found the parent.
+  void Detach(uint32_t parent);
   bool Has(uint32_t id) const { return sensors_.count(id) > 0; }
   size_t size() const { return sensors_.size(); }
   bool HasEventSensors() const;
   bool HasRaySensors() const;
+  // sensor.other.v2x_custom's send(text): the text goes out at the sensor's next step (the
+  // last text sent before it, as CARLA's). Empty on success, else why not.
+  std::string V2XSend(uint32_t sensor, const std::string& text);
 
   // Samples every sensor due at `frame` (dt: the step length). Sensors whose parent is
   // not in the frame produce nothing this frame.

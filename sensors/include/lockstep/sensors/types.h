@@ -39,7 +39,12 @@ struct Actor {
   Vec3 velocity = Vec3::Zero();                // m/s, world
   Vec3 angular_velocity = Vec3::Zero();        // rad/s, world
   uint8_t tag = 0;                             // CARLA semantic tag if set (custom props); 0: from kind and blueprint
+  uint32_t light_state = 0;                    // vehicles: carla.VehicleLightState bits
+  std::string special_type;                    // vehicles: the blueprint's special_type ("emergency", ...)
 };
+
+// A drone's box for ray hits: AirSim's generic quad spans about 0.55 m across its rotors.
+inline const Vec3 kDroneHalfExtents{0.3, 0.3, 0.1};
 
 // CARLA semantic tag of an actor (Car, Truck, Bus, Motorcycle, Bicycle, Pedestrian; drones
 // have no CARLA class: Dynamic).

@@ -1,77 +1,403 @@
 #include "recorder.h"
 
-#include <cstdio>
+#include <algorithm>
+#include <condition_variable>
+#include <ctime>
 #include <filesystem>
+#include <optional>
 
+#include "lockstep/runtime/actor_list.h"
 #include "lockstep/runtime/error.h"
-#include "lockstep/runtime/hash.h"
+#include "lockstep/runtime/frame_buffer.h"
 #include "lockstep/runtime/log.h"
 
 namespace lockstep {
 
-Recorder::Recorder(Bus& bus, RecorderOptions options) : options_(std::move(options)), air_(bus, topics::kAirState, 64) {
-  if (options_.output_dir.empty()) throw InputError("recorder: no output_dir in the launch config");
-  std::filesystem::create_directories(options_.output_dir);
+namespace {
+
+using Ms = std::chrono::milliseconds;
+
+// Samples of (run, frame) from several writers (one per physics service).
+template <class T>
+class FrameSet {
+ public:
+  FrameSet(Bus& bus, const Topic<T>& topic)
+      : reader_(bus, topic, [this](T& s, const SampleInfo& info) { Push(s, info.writer_id); }) {}
+
+  // The samples of (run, frame) once `count` writers sent theirs; nullopt on timeout.
+  std::optional<std::vector<T>> WaitFor(uint32_t run, uint64_t frame, size_t count, Ms timeout) {
+    std::unique_lock<std::mutex> lock(mu_);
+    const Key key{run, frame};
+    if (!cv_.wait_for(lock, timeout, [&] { return samples_.count(key) && samples_[key].size() >= count; })) return std::nullopt;
+    std::vector<T> out;
+    for (auto& [writer, s] : samples_[key]) out.push_back(std::move(s));
+    // Older frames are no longer needed.
+    samples_.erase(samples_.begin(), samples_.lower_bound(key));
+    return out;
+  }
+
+ private:
+  using Key = std::pair<uint32_t, uint64_t>;
+  // Takes the sample (no copy of a large state): the bus reads the next one into `s`.
+  void Push(T& s, uint64_t writer) {
+    {
+      std::lock_guard<std::mutex> lock(mu_);
+      const Key key{s.stamp().run(), s.stamp().frame()};
+      std::swap(samples_[key][writer], s);
+      while (samples_.size() > 16) samples_.erase(samples_.begin());
+    }
+    cv_.notify_all();
+  }
+  std::mutex mu_;
+  std::condition_variable cv_;
+  std::map<Key, std::map<uint64_t, T>> samples_;
+  TakingReader<T> reader_;  // last: its callback uses the members above
+};
+
+std::vector<std::string> Union(std::vector<std::string> a, const std::vector<std::string>& b) {
+  for (const auto& s : b) {
+    if (std::find(a.begin(), a.end(), s) == a.end()) a.push_back(s);
+  }
+  return a;
 }
+
+}  // namespace
+
+// FrameDone and the acks: read all the time (small samples, the last frames kept), so that
+// the first recorded frame has every service's hash and, over DDS, no reader has to match
+// its writers when recording starts.
+struct Recorder::Hashes {
+  std::atomic<uint32_t> run{0};
+  std::mutex mu;
+  std::condition_variable cv;
+  std::map<uint64_t, recorder::FrameHashes> done;                 // FrameDone by frame
+  std::map<uint64_t, std::map<std::string, uint64_t>> acks;       // frame -> service -> hash
+  Reader<msg::FrameDone> done_reader;
+  Reader<msg::Ack> ack_reader;
+
+  explicit Hashes(Bus& bus)
+      : done_reader(bus, topics::kFrameDone,
+                    [this](const msg::FrameDone& d, const SampleInfo&) {
+                      if (d.run() != run) return;
+                      {
+                        std::lock_guard<std::mutex> lock(mu);
+                        auto& h = done[d.frame()];
+                        h.world_hash = d.world_hash();
+                        h.diverged = d.diverged();
+                        while (done.size() > 64) done.erase(done.begin());
+                      }
+                      cv.notify_all();
+                    }),
+        ack_reader(bus, topics::kAck, [this](const msg::Ack& a, const SampleInfo&) {
+          if (a.run() != run) return;
+          std::lock_guard<std::mutex> lock(mu);
+          acks[a.frame()][a.service().to_string()] = a.state_hash();
+          while (acks.size() > 64) acks.erase(acks.begin());
+        }) {}
+
+  // A new run: what was kept belongs to the one before.
+  void NewRun(uint32_t r) {
+    std::lock_guard<std::mutex> lock(mu);
+    done.clear();
+    acks.clear();
+    run = r;
+  }
+  // Recording starts at `frame`: the hashes of earlier frames are not the log's.
+  void StartAt(uint64_t frame) {
+    std::lock_guard<std::mutex> lock(mu);
+    done.erase(done.begin(), done.lower_bound(frame));
+  }
+
+  // Waits (bounded) for FrameDone of `frame`: it comes after the recorder acked it.
+  void WaitDone(uint64_t frame, Ms timeout) {
+    std::unique_lock<std::mutex> lock(mu);
+    cv.wait_for(lock, timeout, [&] { return done.count(frame) > 0; });
+  }
+
+  // The hashes of the frames before `before` that FrameDone completed, with the acks.
+  std::vector<std::pair<uint64_t, recorder::FrameHashes>> Take(uint64_t before) {
+    std::lock_guard<std::mutex> lock(mu);
+    std::vector<std::pair<uint64_t, recorder::FrameHashes>> out;
+    for (auto it = done.begin(); it != done.end() && it->first < before;) {
+      recorder::FrameHashes h = it->second;
+      if (auto a = acks.find(it->first); a != acks.end()) {
+        for (const auto& [service, hash] : a->second) h.services.emplace_back(service, hash);
+      }
+      out.emplace_back(it->first, std::move(h));
+      acks.erase(acks.begin(), acks.upper_bound(it->first));
+      it = done.erase(it);
+    }
+    return out;
+  }
+};
+
+// The state readers of a recording: created when it starts, gone when it stops, so a
+// recorder that does not record reads no state topic.
+struct Recorder::Inputs {
+  uint32_t run = 0;
+  size_t ground_count = 0, air_count = 0, events_count = 0;
+  std::map<std::string, msg::ActorKind> kinds;  // blueprint -> kind, from the declarations
+  std::mutex mu;
+  std::map<uint32_t, msg::SpawnActor> listed;   // the coordinator's actor list
+  FrameSet<msg::GroundState> ground;
+  FrameSet<msg::AirState> air;
+  FrameSet<msg::PhysicsEvents> events;
+  Reader<msg::ActorList> actor_reader;
+
+  Inputs(Bus& bus, uint32_t r)
+      : run(r),
+        ground(bus, topics::kGroundState),
+        air(bus, topics::kAirState),
+        events(bus, topics::kPhysicsEvents),
+        actor_reader(bus, topics::kActors, [this](const msg::ActorList& l, const SampleInfo&) {
+          std::lock_guard<std::mutex> lock(mu);
+          if (l.run() != run) return;
+          for (const auto& a : l.actors()) listed[a.spawn().actor()] = a.spawn();
+        }) {}
+};
+
+Recorder::Recorder(Bus& bus, RecorderOptions options)
+    : bus_(bus),
+      options_(std::move(options)),
+      declarations_(bus),
+      hashes_(std::make_unique<Hashes>(bus)),
+      announce_reader_(bus, topics::kService, [this](const msg::ServiceAnnounce& a, const SampleInfo&) {
+        std::lock_guard<std::mutex> lock(announce_mu_);
+        announced_[a.service().to_string()] = {a.kind().to_string(), a.perception()};
+      }) {
+  if (options_.record_run && options_.output_dir.empty()) {
+    throw InputError("recorder: recording every run needs output_dir in the launch config");
+  }
+}
+
+Recorder::~Recorder() {
+  try {
+    Stop("service stopped");
+  } catch (const std::exception& e) {
+    spdlog::error("recorder: {}", e.what());
+  }
+}
+
+std::string Recorder::recording() const { return writer_ ? writer_->path() : std::string(); }
 
 void Recorder::BeginRun(const msg::WorldInfo& world) {
+  Stop("run ended");
+  hashes_->NewRun(world.run());
+  world_ = world;
   mode_ = world.settings().perception_mode();
-  dir_ = options_.output_dir + "/run" + std::to_string(world.run());
-  std::filesystem::create_directories(dir_);
-  hash_ = Fnv1a64().Add(world.run()).Add(world.seed()).value();
-  opened_ = false;
+  alive_.clear();
+  prelude_.clear();
+  prelude_bytes_ = 0;
+  prelude_complete_ = true;
+  last_dt_ = -1;
+  last_frame_ = 0;
 }
 
-// A run recorded from its first frame starts fresh files; a replacement recorder that
-// takes over mid-run appends to what the one before it wrote.
-void Recorder::Open(uint64_t first_frame) {
-  const bool fresh = first_frame <= 1;
-  const auto mode = fresh ? std::ios::trunc : std::ios::app;
-  air_csv_ = std::ofstream(dir_ + "/air_state.csv", std::ios::out | mode);
-  frames_csv_ = std::ofstream(dir_ + "/frames.csv", std::ios::out | mode);
-  if (!air_csv_ || !frames_csv_) throw InputError("recorder: cannot write into " + dir_);
-  if (fresh) {
-    Line(air_csv_, "frame,sim_time,actor,x,y,z,qw,qx,qy,qz,vx,vy,vz,landed,armed,command_id,command_status");
-    Line(frames_csv_, "tick,sim_time,commands,shown_frame,air_state_hash");
+void Recorder::Track(const msg::Tick& tick) {
+  // The first tick this recorder sees after frame 1 means it joined mid-run: no prelude.
+  if (last_frame_ == 0 && tick.frame() > 1) prelude_complete_ = false;
+  if (prelude_complete_ && (!tick.commands().empty() || tick.dt() != last_dt_)) {
+    prelude_bytes_ += msg::Tick::getCdrSerializedSize(tick);
+    if (prelude_bytes_ > options_.prelude_limit_bytes) {
+      prelude_complete_ = false;
+      prelude_.clear();
+      prelude_.shrink_to_fit();
+    } else {
+      prelude_.push_back(tick);
+    }
   }
-  opened_ = true;
-  spdlog::info("recording run into {} ({})", dir_, fresh ? "new files" : "appending from frame " + std::to_string(first_frame));
+  last_dt_ = tick.dt();
+  last_frame_ = tick.frame();
+  for (const auto& c : tick.commands()) {
+    const auto& b = c.body();
+    if (b._d() == msg::CommandKind::CMD_SPAWN_ACTOR) {
+      alive_[b.spawn_actor().actor()] = b.spawn_actor();
+    } else if (b._d() == msg::CommandKind::CMD_DESTROY_ACTOR) {
+      // Only the actor goes; what was attached to it stays, unattached (the coordinator's
+      // rule, CARLA's).
+      const uint32_t gone = b.destroy_actor().actor();
+      alive_.erase(gone);
+      for (auto& [id, s] : alive_) {
+        if (s.parent() == gone) s.parent(0);
+      }
+    }
+  }
 }
 
-void Recorder::Line(std::ofstream& out, const std::string& line) {
-  out << line << '\n';
-  hash_ = Fnv1a64().Add(hash_).Add(std::string_view(line)).value();
+void Recorder::Start(const msg::Tick& tick, const std::string& path, bool additional_data) {
+  Stop("restarted");
+  const std::vector<std::string> required = RequiredServices(world_);
+  declarations_.WaitFor(required, Ms(static_cast<int>(options_.input_timeout_s * 1000)));
+  auto inputs = std::make_unique<Inputs>(bus_, tick.run());
+  const auto ground = Union(declarations_.Declaring(msg::ActorKind::ACTOR_VEHICLE, required),
+                            declarations_.Declaring(msg::ActorKind::ACTOR_WALKER, required));
+  const auto air = declarations_.Declaring(msg::ActorKind::ACTOR_DRONE, required);
+  inputs->ground_count = ground.size();
+  inputs->air_count = air.size();
+  inputs->events_count = Union(ground, air).size();
+
+  recorder::LogHeader h;
+  h.name = path;
+  h.config_text = options_.config_text;
+  h.config_source = options_.config_source;
+  h.map_name = world_.map_name().to_string();
+  h.map_digest = world_.map_hash();
+  h.seed = world_.seed();
+  h.run = world_.run();
+  h.world = world_;
+  const auto live = declarations_.Live();
+  std::map<std::string, std::pair<std::string, bool>> kinds = options_.service_kinds;
+  {
+    std::lock_guard<std::mutex> lock(announce_mu_);
+    for (const auto& [name, k] : announced_) kinds[name] = k;
+  }
+  std::vector<std::string> names = required;
+  for (const auto& [name, set] : live) {
+    if (std::find(names.begin(), names.end(), name) == names.end()) names.push_back(name);
+  }
+  for (const auto& name : names) {
+    recorder::ServiceInfo s;
+    s.name = name;
+    s.required = std::find(required.begin(), required.end(), name) != required.end();
+    if (auto k = kinds.find(name); k != kinds.end()) {
+      s.kind = k->second.first;
+      s.perception = k->second.second;
+    }
+    if (auto it = live.find(name); it != live.end()) {
+      for (const auto& b : it->second.blueprints()) {
+        s.blueprints.emplace_back(b.id().to_string(), b.kind());
+        inputs->kinds[b.id().to_string()] = b.kind();
+      }
+      s.blueprint_set_cdr = recorder::ToCdr(it->second);
+    }
+    h.services.push_back(std::move(s));
+  }
+  h.first_frame = tick.frame();
+  h.first_sim_time = tick.sim_time();
+  h.start_unix_time = static_cast<int64_t>(std::time(nullptr));
+  h.additional_data = additional_data;
+  h.keyframe_period = options_.keyframe_period;
+  if (prelude_complete_ && tick.frame() > 1) {
+    h.prelude = prelude_;
+    h.prelude_frames = tick.frame() - 1;
+  }
+  try {
+    writer_ = std::make_unique<recorder::LogWriter>(path, h);
+  } catch (const std::exception& e) {
+    spdlog::error("recorder: not recording: {}", e.what());
+    return;
+  }
+  inputs_ = std::move(inputs);
+  hashes_->StartAt(tick.frame());
+  spdlog::info("recording run {} from frame {} into {}", tick.run(), tick.frame(), path);
+}
+
+void Recorder::Stop(const std::string& reason) {
+  if (!writer_) return;
+  // The last frame's FrameDone follows its ack; wait for it a little.
+  if (writer_->frames() > 0) hashes_->WaitDone(writer_->last_frame(), Ms(reason == "service stopped" ? 1000 : 2000));
+  auto late = hashes_->Take(UINT64_MAX);
+  const std::string path = writer_->path();
+  const uint64_t frames = writer_->frames();
+  writer_->Close(reason, late);
+  writer_.reset();
+  inputs_.reset();
+  spdlog::info("recorder: {} ({} frames, {})", path, frames, reason);
 }
 
 void Recorder::Step(const msg::Tick& tick) {
-  // A replacement recorder cannot rebuild past rows (their inputs are gone): it appends
-  // from the frame it takes over, and its state hash starts over from there.
-  if (replaying()) return;
-  if (!opened_) Open(tick.frame());
-  const uint64_t frame = PerceptionFrame(mode_, tick.frame());
-  uint64_t air_hash = 0;
-  if (options_.air_state && frame >= 1) {
-    auto air = air_.WaitFor(tick.run(), frame, std::chrono::milliseconds(static_cast<int>(options_.input_timeout_s * 1000)));
-    if (!air) throw InputError("recorder: no AirState of frame " + std::to_string(frame) + " within the timeout");
-    air_hash = air->state_hash();
-    char buf[512];
-    for (const auto& d : air->drones()) {
-      const auto& p = d.transform().position();
-      const auto& q = d.transform().orientation();
-      const auto& v = d.linear_velocity();
-      std::snprintf(buf, sizeof buf, "%llu,%.3f,%u,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.6f,%.4f,%.4f,%.4f,%d,%d,%llu,%d",
-                    static_cast<unsigned long long>(frame), air->stamp().sim_time(), d.actor(), p.x(), p.y(), p.z(), q.w(), q.x(),
-                    q.y(), q.z(), v.x(), v.y(), v.z(), d.landed() == msg::LandedState::LANDED_LANDED ? 1 : 0, d.armed() ? 1 : 0,
-                    static_cast<unsigned long long>(d.command_id()), static_cast<int>(d.command_status()));
-      Line(air_csv_, buf);
+  if (replaying()) {
+    // A replacement cannot rebuild past frames (their inputs are gone); it learns the actors.
+    Track(tick);
+    return;
+  }
+  bool start = false, additional = false;
+  std::string path;
+  for (const auto& c : tick.commands()) {
+    if (c.body()._d() != msg::CommandKind::CMD_RECORDER) continue;
+    const auto& r = c.body().recorder();
+    if (r.action() == msg::RecorderAction::RECORDER_START) {
+      start = true;
+      path = recorder::ResolveLogPath(r.name().to_string());
+      additional = r.flag();
+    } else if (r.action() == msg::RecorderAction::RECORDER_STOP) {
+      start = false;
+      Stop("stopped");
     }
   }
-  char buf[128];
-  std::snprintf(buf, sizeof buf, "%llu,%.3f,%zu,%llu,%016llx", static_cast<unsigned long long>(tick.frame()), tick.sim_time(),
-                tick.commands().size(), static_cast<unsigned long long>(frame), static_cast<unsigned long long>(air_hash));
-  Line(frames_csv_, buf);
-  air_csv_.flush();
-  frames_csv_.flush();
+  if (!writer_ && options_.record_run && !options_.read_only && last_frame_ == 0) {
+    start = true;
+    path = options_.output_dir + "/run" + std::to_string(tick.run()) + "/" + options_.run_log_name;
+  }
+  if (start && !options_.read_only) Start(tick, path, additional);
+  Track(tick);
+  if (writer_) WriteFrame(tick);
+}
+
+void Recorder::WriteFrame(const msg::Tick& tick) {
+  Inputs& in = *inputs_;
+  const auto timeout = Ms(static_cast<int>(options_.input_timeout_s * 1000));
+  const uint64_t state_frame = PerceptionFrame(mode_, tick.frame());
+  std::vector<msg::GroundState> ground;
+  std::vector<msg::AirState> air;
+  std::vector<msg::PhysicsEvents> events;
+  if (state_frame >= 1) {
+    auto need = [&](auto& set, size_t count, const char* what, auto* out) {
+      if (count == 0) return;
+      auto got = set.WaitFor(tick.run(), state_frame, count, timeout);
+      if (!got) {
+        throw MissingInput("recorder: no " + std::string(what) + " of frame " + std::to_string(state_frame) + " from all " +
+                           std::to_string(count) + " services within " + std::to_string(options_.input_timeout_s) + " s");
+      }
+      *out = std::move(*got);
+    };
+    need(in.ground, in.ground_count, "GroundState", &ground);
+    need(in.air, in.air_count, "AirState", &air);
+    need(in.events, in.events_count, "PhysicsEvents", &events);
+  }
+  // The frame before is done (its FrameDone came before this tick, on another topic).
+  if (writer_->frames() > 0) hashes_->WaitDone(tick.frame() - 1, Ms(1000));
+  recorder::FrameInputs f;
+  f.tick = &tick;
+  f.state_frame = state_frame;
+  for (const auto& g : ground) f.ground.push_back(&g);
+  for (const auto& a : air) f.air.push_back(&a);
+  for (const auto& e : events) f.events.push_back(&e);
+  f.hashes = hashes_->Take(tick.frame());
+  std::map<uint32_t, msg::SpawnActor> listed;
+  {
+    std::lock_guard<std::mutex> lock(in.mu);
+    listed = in.listed;
+  }
+  auto spawn_of = [&](uint32_t id) -> const msg::SpawnActor* {
+    if (auto it = alive_.find(id); it != alive_.end()) return &it->second;
+    if (auto it = listed.find(id); it != listed.end()) return &it->second;
+    return nullptr;
+  };
+  auto kind_of = [&](const std::string& blueprint) {
+    auto it = in.kinds.find(blueprint);
+    return it == in.kinds.end() ? msg::ActorKind::ACTOR_OTHER : it->second;
+  };
+  for (const auto& [id, s] : alive_) {
+    const auto k = kind_of(s.blueprint().to_string());
+    if (k != msg::ActorKind::ACTOR_VEHICLE && k != msg::ActorKind::ACTOR_WALKER && k != msg::ActorKind::ACTOR_DRONE) {
+      f.stateless_actors.push_back(id);
+    }
+  }
+  f.describe = [&](uint32_t id) -> std::optional<recorder::ActorInfo> {
+    const msg::SpawnActor* s = spawn_of(id);
+    if (s == nullptr) return std::nullopt;
+    recorder::ActorInfo a;
+    a.id = id;
+    a.blueprint = s->blueprint().to_string();
+    a.kind = kind_of(a.blueprint);
+    a.parent = s->parent();
+    a.owner = s->owner().to_string();
+    for (const auto& at : s->attributes()) a.attributes.emplace_back(at.key().to_string(), at.value().to_string());
+    a.spawn_pose = s->transform();
+    return a;
+  };
+  writer_->WriteFrame(f);
 }
 
 }  // namespace lockstep

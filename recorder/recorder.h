@@ -1,40 +1,77 @@
 #pragma once
-// The recorder service: a perception-phase member of the barrier that writes the world
-// state of every frame to files. Because it acks frame k only after writing frame k,
-// a finished run has a complete, frame-aligned record (no dropped or shifted frames).
-#include <fstream>
+// The recorder service: a perception-phase member of the barrier that writes Lockstep logs
+// (docs/recorder.md). It records when a tick carries CMD_RECORDER RECORDER_START (CARLA's
+// start_recorder) until RECORDER_STOP or the end of the run, and, with `record_run`, every
+// run from its first frame. Frame k of a log holds tick k (bit for bit), the states of
+// PerceptionFrame(mode, k), the frame's events and the hashes of the frame before; it acks
+// k only after writing it, so a log has every frame. While not recording it reads no state
+// topic and its step does nearly nothing. Its state hash is 0: a log is not world state,
+// so recording or not never changes a run's world hash.
+#include <atomic>
+#include <map>
 #include <memory>
+#include <mutex>
+#include <set>
 #include <string>
+#include <vector>
 
-#include "lockstep/runtime/frame_buffer.h"
+#include "lockstep/recorder/log_writer.h"
+#include "lockstep/runtime/declarations.h"
 #include "lockstep/runtime/service.h"
 
 namespace lockstep {
 
 struct RecorderOptions {
-  std::string output_dir;        // created if missing
-  bool air_state = true;         // wait for and record AirState of each frame
-  double input_timeout_s = 10;   // s, how long to wait for a frame's inputs
+  std::string output_dir;        // record_run: the logs go to <output_dir>/run<N>/<run_log_name>
+  bool record_run = false;       // record every run from its first frame (the main job)
+  std::string run_log_name = "recording.lslog";
+  bool read_only = false;        // never write (re-simulation: the recorder of the log's config)
+  double input_timeout_s = 10;   // s, how long to wait for a frame's inputs while recording
+  std::string config_text;       // the launch config, for the log header
+  std::string config_source;
+  std::map<std::string, std::pair<std::string, bool>> service_kinds;  // name -> (kind, perception), from the config
+  uint32_t keyframe_period = 200;
+  size_t prelude_limit_bytes = 64u << 20;  // earlier ticks kept for a mid-run start (CDR bytes)
 };
 
 class Recorder final : public ServiceCore {
  public:
   Recorder(Bus& bus, RecorderOptions options);
+  ~Recorder() override;
   void BeginRun(const msg::WorldInfo& world) override;
   void Step(const msg::Tick& tick) override;
-  uint64_t StateHash() const override { return hash_; }
+  uint64_t StateHash() const override { return 0; }
+
+  // The log being written ("" when not recording), for tests and status.
+  std::string recording() const;
 
  private:
-  void Line(std::ofstream& out, const std::string& line);
-  void Open(uint64_t first_frame);
+  struct Inputs;
+  struct Hashes;
+  void Start(const msg::Tick& tick, const std::string& path, bool additional_data);
+  void Stop(const std::string& reason);
+  void Track(const msg::Tick& tick);
+  void WriteFrame(const msg::Tick& tick);
+
+  Bus& bus_;
   RecorderOptions options_;
+  Declarations declarations_;
+  msg::WorldInfo world_;
   msg::PerceptionMode mode_ = msg::PerceptionMode::PERCEPTION_STRICT;
-  FrameBuffer<msg::AirState> air_;
-  std::ofstream air_csv_;
-  std::ofstream frames_csv_;
-  std::string dir_;      // output folder of the current run
-  bool opened_ = false;  // files are opened at the first live step of a run
-  uint64_t hash_ = 0;
+  std::unique_ptr<recorder::LogWriter> writer_;
+  std::unique_ptr<Inputs> inputs_;  // the state readers, only while recording
+  std::unique_ptr<Hashes> hashes_;  // FrameDone and acks (kept only while recording)
+  // What every tick of the run said, kept while not recording (cheap: spawns and commands).
+  std::map<uint32_t, msg::SpawnActor> alive_;     // live spawned actors by id
+  std::vector<msg::Tick> prelude_;                // ticks with commands or a new dt
+  size_t prelude_bytes_ = 0;
+  bool prelude_complete_ = true;                  // false once the limit dropped ticks
+  uint64_t prelude_frames_ = 0;
+  double last_dt_ = -1;
+  uint64_t last_frame_ = 0;
+  mutable std::mutex announce_mu_;
+  std::map<std::string, std::pair<std::string, bool>> announced_;  // name -> (kind, perception)
+  Reader<msg::ServiceAnnounce> announce_reader_;
 };
 
 }  // namespace lockstep

@@ -252,6 +252,18 @@ LaunchConfig Load(const YAML::Node& root, const std::string& where) {
     c.scenario.push_back(LoadStep(YamlMap(scenario[i], where, "scenario[" + std::to_string(i) + "]"), i));
   }
   std::stable_sort(c.scenario.begin(), c.scenario.end(), [](const auto& a, const auto& b) { return a.frame < b.frame; });
+  // `recorder: false`: no recorder service unless the config lists one. Otherwise
+  // `lockstep up` (which sets LOCKSTEP_DEFAULT_RECORDER for itself and its children, so the
+  // coordinator requires what the launcher starts) adds one, as CARLA's server always has
+  // its recorder; it costs next to nothing while not recording (docs/recorder.md).
+  bool recorder = true;
+  m.Get("recorder", &recorder);
+  const char* default_recorder = std::getenv("LOCKSTEP_DEFAULT_RECORDER");
+  if (recorder && default_recorder != nullptr && std::string(default_recorder) == "1" &&
+      std::none_of(c.services.begin(), c.services.end(), [](const ServiceLaunch& s) { return s.kind == "recorder"; }) &&
+      !names.count("recorder")) {
+    c.services.push_back({"recorder", "recorder", "", {}, true, true, "never"});
+  }
   m.Finish();
   if (c.domain_id < 0 || c.domain_id > 232) {
     throw InputError(where + ": domain_id must be in 0..232, got " + std::to_string(c.domain_id));

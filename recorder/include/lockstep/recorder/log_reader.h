@@ -192,6 +192,10 @@ class LogReader {
   void ForEach(uint64_t from, uint64_t to, const std::function<bool(const LogFrame&)>& fn,
                const std::function<void(uint64_t, uint64_t)>& progress = {});
   void ForEach(const std::function<bool(const LogFrame&)>& fn) { ForEach(0, UINT64_MAX, fn); }
+  // Only the ticks (as CDR bytes, bit for bit) and the hashes, frame by frame, without the
+  // states: for re-simulation and diff. `fn(frame, tick_cdr, hashes)` returns false to stop.
+  void ForEachTick(uint64_t from, uint64_t to,
+                   const std::function<bool(uint64_t, const std::string&, const std::optional<FrameHashes>&)>& fn);
 
  private:
   struct Impl;

@@ -9,6 +9,7 @@
 #include "lockstep/runtime/blueprint_builder.h"
 #include "lockstep/runtime/error.h"
 #include "lockstep/runtime/log.h"
+#include "frame_actors.h"
 
 namespace lockstep {
 
@@ -16,21 +17,13 @@ namespace {
 
 namespace s = sensors;
 
-// A drone's box for ray hits: AirSim's generic quad spans about 0.55 m across its rotors.
-const s::Vec3 kDroneHalfExtents(0.3, 0.3, 0.1);
-
-s::Vec3 ToVec(const msg::Vector3& v) { return {v.x(), v.y(), v.z()}; }
+s::Vec3 ToVec(const msg::Vector3& v) { return s::FromWire(v); }
 msg::Vector3 FromVec(const s::Vec3& v) {
   msg::Vector3 m;
   m.x(v.x());
   m.y(v.y());
   m.z(v.z());
   return m;
-}
-s::Quat ToQuat(const msg::Quaternion& q) {
-  s::Quat out(q.w(), q.x(), q.y(), q.z());
-  if (out.norm() < 1e-9) return s::Quat::Identity();  // an unset pose means no rotation
-  return out.normalized();
 }
 msg::Quaternion FromQuat(const s::Quat& q) {
   msg::Quaternion m;
@@ -40,7 +33,7 @@ msg::Quaternion FromQuat(const s::Quat& q) {
   m.z(q.z());
   return m;
 }
-s::Pose ToPose(const msg::Pose& p) { return s::Pose{ToVec(p.position()), ToQuat(p.orientation())}; }
+s::Pose ToPose(const msg::Pose& p) { return s::FromWire(p); }
 msg::Pose FromPose(const s::Pose& p) {
   msg::Pose m;
   m.position(FromVec(p.position));
@@ -88,7 +81,7 @@ msg::AttributeDeclaration Declare(const s::AttributeSpec& a) {
       d.default_value(a.default_value);  // the exact default, not a 6-digit rendering
       return d;
     }
-    case s::AttrType::kString: return blueprint::String(a.id, a.default_value);
+    case s::AttrType::kString: return blueprint::String(a.id, a.default_value, a.choices, !a.choices.empty());
   }
   return blueprint::String(a.id, a.default_value);
 }
@@ -138,6 +131,7 @@ SensorsService::SensorsService(Bus& bus, std::string name, SensorsOptions option
       obstacle_writer_(bus, topics::kObstacle),
       collision_writer_(bus, topics::kCollision),
       lane_invasion_writer_(bus, topics::kLaneInvasion),
+      v2x_writer_(bus, topics::kV2X),
       event_writer_(bus, topics::kEvent),
       declarations_(bus),
       ground_(bus, topics::kGroundState, 16),
@@ -225,6 +219,7 @@ void SensorsService::BeginRun(const msg::WorldInfo& world) {
   for (const auto* list : {&ground, &walkers, &air}) event_publishers_.insert(list->begin(), list->end());
   world_ = std::make_unique<s::SensorWorld>(seed_, geo_);
   props_.clear();
+  special_types_.clear();
   world_->set_weather(weather_);
   if (town_meshes_) world_->scene().SetStatic(*town_meshes_);
   files_.reset();
@@ -265,14 +260,37 @@ void SensorsService::Apply(const msg::Command& c, const msg::FrameStamp& stamp) 
     }
     case msg::CommandKind::CMD_DESTROY_ACTOR:
       world_->Remove(b.destroy_actor().actor());
+      world_->Detach(b.destroy_actor().actor());  // its sensors stay where they were (CARLA)
       props_.erase(b.destroy_actor().actor());
       return;
+    case msg::CommandKind::CMD_V2X_SEND: {
+      const auto& v = b.v2x_send();
+      if (!world_->Has(v.sensor())) return;  // another sensors service's
+      if (std::string why = world_->V2XSend(v.sensor(), v.data().to_string()); !why.empty()) Fail(stamp, v.sensor(), "send: " + why);
+      return;
+    }
     case msg::CommandKind::CMD_SET_WEATHER:
       weather_ = s::Weather{b.weather().precipitation(), b.weather().fog_density()};
       world_->set_weather(weather_);
       return;
     default: return;
   }
+}
+
+// The special_type a vehicle blueprint declares (CARLA's V2X station type reads it).
+const std::string& SensorsService::SpecialType(const std::string& blueprint) {
+  auto it = special_types_.find(blueprint);
+  if (it != special_types_.end()) return it->second;
+  std::string value;
+  for (const auto& [service, set] : declarations_.Live()) {
+    for (const auto& d : set.blueprints()) {
+      if (d.id().to_string() != blueprint) continue;
+      for (const auto& a : d.attributes()) {
+        if (a.id().to_string() == "special_type") value = a.default_value().to_string();
+      }
+    }
+  }
+  return special_types_[blueprint] = value;
 }
 
 void SensorsService::AddCustomProp(const msg::SpawnActor& sp, const msg::FrameStamp& stamp) {
@@ -306,43 +324,16 @@ s::WorldFrame SensorsService::Gather(const msg::Tick& tick, uint64_t frame, s::F
     auto g = ground_.WaitFor(tick.run(), frame, timeout);
     if (!g) throw InputError("sensors: no GroundState of frame " + std::to_string(frame) + " within the input timeout");
     f.sim_time = g->stamp().sim_time();
-    for (const auto& v : g->vehicles()) {
-      s::Actor a;
-      a.id = v.actor();
-      a.kind = s::ActorKind::kVehicle;
-      a.blueprint = v.blueprint().to_string();
-      a.pose = ToPose(v.transform());
-      a.half_extents = ToVec(v.half_extents());
-      a.velocity = ToVec(v.velocity());
-      a.angular_velocity = ToVec(v.angular_velocity());
-      f.actors.push_back(std::move(a));
-    }
-    for (const auto& w : g->walkers()) {
-      s::Actor a;
-      a.id = w.actor();
-      a.kind = s::ActorKind::kWalker;
-      a.blueprint = w.blueprint().to_string();
-      a.pose = ToPose(w.transform());
-      a.half_extents = ToVec(w.half_extents());
-      a.velocity = ToVec(w.velocity());
-      f.actors.push_back(std::move(a));
+    s::AppendActors(*g, &f.actors);
+    for (auto& a : f.actors) {
+      if (a.kind == s::ActorKind::kVehicle) a.special_type = SpecialType(a.blueprint);
     }
   }
   if (air_in_run_) {
     auto air = air_.WaitFor(tick.run(), frame, timeout);
     if (!air) throw InputError("sensors: no AirState of frame " + std::to_string(frame) + " within the input timeout");
     f.sim_time = air->stamp().sim_time();
-    for (const auto& d : air->drones()) {
-      s::Actor a;
-      a.id = d.actor();
-      a.kind = s::ActorKind::kDrone;
-      a.blueprint = d.blueprint().to_string();
-      a.pose = ToPose(d.transform());
-      a.half_extents = kDroneHalfExtents;
-      a.velocity = ToVec(d.linear_velocity());
-      a.angular_velocity = a.pose.orientation * ToVec(d.angular_velocity());  // body -> world
-      f.actors.push_back(std::move(a));
-    }
+    s::AppendActors(*air, &f.actors);
   }
   // Custom props: their declared box at the spawn transform, relative to the parent's mount
   // as the render service draws them (vehicles and walkers: the bottom of their box).
@@ -522,6 +513,22 @@ void SensorsService::Publish(const s::StepOutput& out, const msg::FrameStamp& st
     for (const auto& c : t.data.crossed) crossed.push_back(ToWire(c));
     m.crossed(crossed);
     lane_invasion_writer_.Write(m);
+  }
+  for (const auto& t : out.v2x) {
+    msg::V2XData m;
+    m.sensor(t.sensor);
+    m.stamp(stamp);
+    std::vector<msg::V2XReceived> got;
+    for (const auto& r : t.data) {
+      if (got.size() >= 256) break;  // the message's bound: the nearest senders' ids come first
+      msg::V2XReceived x;
+      x.sender(r.sender);
+      x.power_dbm(r.power_dbm);
+      x.payload(std::vector<uint8_t>(r.payload.begin(), r.payload.begin() + std::min<size_t>(r.payload.size(), 2048)));
+      got.push_back(std::move(x));
+    }
+    m.messages(std::move(got));
+    v2x_writer_.Write(m);
   }
 }
 

@@ -65,6 +65,7 @@ class SensorsService final : public ServiceCore {
   // A spawn of a custom.<name> prop another service declared (the render service's
   // imported assets): kept as a box with the declared extents and semantic class.
   void AddCustomProp(const msg::SpawnActor& spawn, const msg::FrameStamp& stamp);
+  const std::string& SpecialType(const std::string& vehicle_blueprint);
 
   struct CustomProp {
     uint32_t parent = 0;
@@ -85,6 +86,7 @@ class SensorsService final : public ServiceCore {
   std::unique_ptr<sensors::SensorWorld> world_;
   std::unique_ptr<SampleWriter> files_;
   std::map<uint32_t, CustomProp> props_;  // custom props spawned in this run, by actor id
+  std::map<std::string, std::string> special_types_;  // vehicle blueprint -> special_type
 
   // The town: meshes and geo reference of the current map, kept across runs.
   std::mutex map_mu_;
@@ -104,6 +106,7 @@ class SensorsService final : public ServiceCore {
   Writer<msg::ObstacleDetection> obstacle_writer_;
   Writer<msg::CollisionEvent> collision_writer_;
   Writer<msg::LaneInvasionEvent> lane_invasion_writer_;
+  Writer<msg::V2XData> v2x_writer_;
   Writer<msg::SimEvent> event_writer_;
   Declarations declarations_;  // which required services simulate vehicles, walkers, drones
   FrameBuffer<msg::GroundState> ground_;

@@ -17,7 +17,7 @@
   X(WorldInfo) X(MapData) X(Command) X(CommandReply) X(GroundState) X(AirState)          \
   X(SimEvent) X(Image) X(PointCloud) X(RadarScan) X(Imu) X(Gnss) X(Barometer)            \
   X(Magnetometer) X(CollisionEvent) X(LaneInvasionEvent) X(ObstacleDetection) X(PhysicsEvents) \
-  X(DistanceMeasurement)
+  X(DistanceMeasurement) X(LargeImage) X(V2XData)
 
 namespace lockstep {
 
@@ -62,8 +62,13 @@ inline constexpr Topic<msg::CollisionEvent> kCollision{"lockstep/sensor/collisio
 inline constexpr Topic<msg::LaneInvasionEvent> kLaneInvasion{"lockstep/sensor/lane_invasion", QosKind::kEvent};
 inline constexpr Topic<msg::ObstacleDetection> kObstacle{"lockstep/sensor/obstacle", QosKind::kSensor};
 inline constexpr Topic<msg::DistanceMeasurement> kDistance{"lockstep/sensor/distance", QosKind::kSensor};
+// V2X sensors: what each received in a step (only steps in which it received something).
+inline constexpr Topic<msg::V2XData> kV2X{"lockstep/sensor/v2x", QosKind::kEvent};
 // Camera images: one topic per camera (msg::Image), QosKind::kImage.
 inline std::string ImageTopicName(uint32_t sensor) { return "lockstep/sensor/image/" + std::to_string(sensor); }
+// A camera whose image exceeds Image's bound publishes msg::LargeImage (unbounded) on its own
+// topic instead, QosKind::kLargeImage (no data-sharing: shared memory or UDP fragments).
+inline std::string LargeImageTopicName(uint32_t sensor) { return "lockstep/sensor/large_image/" + std::to_string(sensor); }
 }  // namespace topics
 
 }  // namespace lockstep

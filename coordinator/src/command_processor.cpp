@@ -5,7 +5,9 @@
 #include <map>
 #include <sstream>
 
+#include "lockstep/recorder/recordings.h"
 #include "lockstep/runtime/launch_config.h"
+#include "playback.h"
 
 namespace lockstep {
 namespace {
@@ -137,6 +139,8 @@ std::string CommandProcessor::CheckDrone(const msg::DroneCommand& d) const {
     case K::DRONE_SET_WIND:
       return InRange("wind speed", std::sqrt(d.target().x() * d.target().x() + d.target().y() * d.target().y() +
                                              d.target().z() * d.target().z()), 0, 100);
+    case K::DRONE_SET_API_CONTROL:
+      return need_values(1, "take (1) or release (0)");
     case K::DRONE_SET_KINEMATICS:
       if (d.values().size() != 4 && d.values().size() != 7 && d.values().size() != 10) {
         return "set kinematics needs 4, 7 or 10 values (orientation w x y z, velocity, angular velocity)";
@@ -319,6 +323,34 @@ std::string CommandProcessor::Check(const msg::Command& cmd, bool synchronous) c
       return InRange("pedestrians cross factor", b.pedestrians().cross_factor(), 0, 1);
     case CommandKind::CMD_DEBUG_DRAW:
       return CheckDebugDraw(b.debug_draw());
+    case CommandKind::CMD_RECORDER: {
+      // Playback (REPLAY_*) is the coordinator's own (playback.h): no recorder service needed.
+      if (IsReplayAction(b.recorder().action())) return CheckReplayCommand(b.recorder());
+      if (recorders_.empty()) {
+        return "recorder commands need a recorder service; none runs in this simulation (lockstep up starts one unless "
+               "the config says recorder: false)";
+      }
+      const auto& r = b.recorder();
+      switch (r.action()) {
+        case msg::RecorderAction::RECORDER_START:
+          if (r.name().to_string().empty()) return "start_recorder needs a file name";
+          return {};
+        case msg::RecorderAction::RECORDER_STOP:
+          return {};
+        default:
+          return "unknown recorder action";
+      }
+    }
+    case CommandKind::CMD_V2X_SEND: {
+      // CARLA's send(): only a sensor.other.v2x_custom takes messages (ActorTypeMismatch).
+      const uint32_t id = b.v2x_send().sensor();
+      auto it = actors_.find(id);
+      if (it == actors_.end()) return "send: unknown actor " + std::to_string(id);
+      if (it->second.blueprint != "sensor.other.v2x_custom") {
+        return "send: actor " + std::to_string(id) + " is a " + it->second.blueprint + ", not a sensor.other.v2x_custom";
+      }
+      return {};
+    }
   }
   return "unknown command kind";
 }
@@ -384,6 +416,20 @@ msg::CommandReply CommandProcessor::Submit(const msg::Command& cmd, uint32_t run
     case CommandKind::CMD_TICK:
       reply.frame(next_frame + b.tick_request().count() - 1);
       return reply;  // the coordinator counts it; services never see tick requests
+    case CommandKind::CMD_RECORDER: {
+      // A relative name resolves in the recordings folder; the tick carries the absolute
+      // path, so the recorder writes where the reply says (CARLA's "Recording on file").
+      auto& r = b.recorder();
+      if (r.action() == msg::RecorderAction::RECORDER_START) {
+        recording_ = recorder::ResolveLogPath(r.name().to_string());
+        r.name(recording_);
+        reply.text(recording_);
+      } else if (r.action() == msg::RecorderAction::RECORDER_STOP) {
+        reply.text(recording_);
+        recording_.clear();
+      }
+      break;
+    }
     default:
       break;
   }

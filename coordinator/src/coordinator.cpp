@@ -286,6 +286,11 @@ struct Coordinator::Impl {
       const Member* m = members.Find(service);
       return m != nullptr && m->alive;
     });
+    std::vector<std::string> recorders;
+    for (const auto& [name, m] : members.members()) {
+      if (m.alive && m.kind == "recorder") recorders.push_back(name);
+    }
+    commands.SetRecorders(std::move(recorders));
   }
 
   // Asks the owner of `spawn` to check it (blueprint.idl: SpawnCheck) and waits for the

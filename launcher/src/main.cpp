@@ -26,6 +26,7 @@
 #include "lockstep/runtime/launch_config.h"
 #include "lockstep/runtime/log.h"
 #include "lockstep/runtime/shm_sweep.h"
+#include "log_command.h"
 #include "progress.h"
 #include "serve.h"
 #include "supervisor.h"
@@ -48,6 +49,9 @@ void SweepShm(bool quiet) {
 
 int Up(const std::string& config_file, int domain, bool with_coordinator) {
   SweepShm(true);
+  // A recorder service joins unless the config says `recorder: false` (docs/recorder.md);
+  // the children inherit this, so the coordinator requires the recorder it starts.
+  setenv("LOCKSTEP_DEFAULT_RECORDER", "1", 1);
   lockstep::LaunchConfig config = lockstep::LoadLaunchConfig(config_file);
   if (domain >= 0) config.domain_id = domain;
   const std::string bin = BinDir();
@@ -293,6 +297,10 @@ int main(int argc, char** argv) {
   auto* map = app.add_subcommand("map", "map tools (see lockstep-map --help)");
   map->prefix_command();
 
+  auto* log_cmd = app.add_subcommand("log", "Lockstep logs: info, collisions, blocked, export --csv, replay --resimulate, diff A B "
+                                            "(lockstep log --help)");
+  log_cmd->prefix_command();
+
   auto* clean_shm = app.add_subcommand(
       "clean-shm", "remove the shared-memory files of Fast DDS participants that died without cleaning up");
 
@@ -307,6 +315,7 @@ int main(int argc, char** argv) {
     if (*up) return Up(config_file, domain, !no_coordinator);
     if (*serve) return Serve(serve_options);
     if (*status) return Status(status_domain, profile, wait_s, json);
+    if (*log_cmd) return lockstep::launcher::LogCommand(log_cmd->remaining(), g_stop);
     if (*map) {
       const std::string tool = BinDir() + "/lockstep-map";
       // lockstep-map reads its positionals by place: pass options (anywhere on our

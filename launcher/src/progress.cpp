@@ -1,5 +1,10 @@
 #include "progress.h"
 
+#include <unistd.h>
+
+#include <chrono>
+#include <cstdio>
+
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -140,6 +145,36 @@ std::string FormatSummary(const Summary& s) {
     if (!text.empty() && text.back() != '\n') out += "\n";
   }
   return out;
+}
+
+namespace {
+double NowS() {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now().time_since_epoch()).count();
+}
+}  // namespace
+
+WorkProgress::WorkProgress(std::string what, uint64_t total)
+    : what_(std::move(what)), total_(total), terminal_(isatty(STDERR_FILENO) != 0), start_s_(NowS()) {}
+
+void WorkProgress::Update(uint64_t done, double sim_time) {
+  const double now = NowS();
+  Progress p{done, total_, sim_time, now - start_s_, 0, ""};
+  if (terminal_) {
+    if (now - last_draw_s_ < 0.1 && done < total_) return;
+    last_draw_s_ = now;
+    std::fprintf(stderr, "\r%s: %s\033[K", what_.c_str(), FormatProgress(p, true, 100).c_str());
+    drawn_ = true;
+  } else if (PlainLineDue(done, total_, last_plain_)) {
+    last_plain_ = done;
+    std::fprintf(stderr, "%s: %s\n", what_.c_str(), FormatProgress(p, false, 200).c_str());
+  }
+  std::fflush(stderr);
+}
+
+void WorkProgress::Done() {
+  if (drawn_) std::fprintf(stderr, "\n");
+  drawn_ = false;
+  std::fflush(stderr);
 }
 
 }  // namespace lockstep::launcher

@@ -25,6 +25,25 @@ std::string FormatProgress(const Progress& p, bool bar, size_t width);
 // every 500 frames when the run has no end. `last_reported` is the frame of the last one.
 bool PlainLineDue(uint64_t frame, uint64_t total, uint64_t last_reported);
 
+// Progress of long work that is not a run (`lockstep log` export, replay, diff): on a
+// terminal a bar redrawn in place on stderr at most 10 times a second, otherwise a plain
+// line every tenth; Done() ends it.
+class WorkProgress {
+ public:
+  WorkProgress(std::string what, uint64_t total);
+  void Update(uint64_t done, double sim_time);
+  void Done();
+
+ private:
+  std::string what_;
+  uint64_t total_;
+  bool terminal_;
+  double start_s_;
+  double last_draw_s_ = -1;
+  uint64_t last_plain_ = 0;
+  bool drawn_ = false;
+};
+
 struct MemberFigures {
   std::string service;
   std::string kind;

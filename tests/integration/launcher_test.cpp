@@ -26,13 +26,21 @@ std::string Config(const std::string& out, uint64_t ticks, uint64_t seed = 5, co
   return "name: launcher-test\ndomain_id: " + std::to_string(TestDomain()) +
          "\nparticipant_profile: lockstep.participant.loopback\nseed: " + std::to_string(seed) + "\nticks: " + std::to_string(ticks) +
          "\noutput_dir: " + out +
-         "\nservices:\n  - {name: air_sim, kind: air_sim}\n  - {name: recorder, kind: recorder, perception: true}\n"
+         "\nservices:\n  - {name: air_sim, kind: air_sim}\n  - {name: recorder, kind: recorder, perception: true, args: [--record-run]}\n"
          "scenario:\n"
          "  - {frame: 1, spawn: drone.generic_quad, as: d, at: [1, 2, 0]}\n"
          "  - {frame: 2, actor: d, drone: arm}\n"
          "  - {frame: 3, actor: d, drone: takeoff}\n"
          "  - {frame: 60, actor: d, drone: move_to_position, target: [6, 2, 3], velocity: 3}\n" +
          extra_steps;
+}
+
+// The recorder's log of run 1 as CSV (`lockstep log export --csv`): air_state.csv, frames.csv.
+std::pair<std::string, std::string> ExportCsv(const std::string& out) {
+  Process exp({Bin("lockstep"), "log", "export", out + "/run1/recording.lslog", "--csv", out + "/csv"});
+  auto code = exp.Wait(60s);
+  EXPECT_TRUE(code && *code == 0) << exp.Output();
+  return {Read(out + "/csv/air_state.csv"), Read(out + "/csv/frames.csv")};
 }
 
 // Issue 7, part 3: determinism with a control. With a seeded model switched on (wind
@@ -49,7 +57,7 @@ TEST(Launcher, WithTurbulenceTheSameSeedRepeatsAndAnotherSeedDiffers) {
     Process up({Bin("lockstep"), "up", config});
     auto code = up.Wait(60s);
     EXPECT_TRUE(code && *code == 0) << up.Output();
-    std::pair<std::string, std::string> r{Read(out + "/run1/air_state.csv"), Read(out + "/run1/frames.csv")};
+    std::pair<std::string, std::string> r = ExportCsv(out);
     std::filesystem::remove_all(out);
     return r;
   };
@@ -78,8 +86,7 @@ TEST(Launcher, RunsTheScenarioAndRecordsEveryFrameDeterministically) {
     const std::string log = up.Output();
     EXPECT_NE(log.find("coordinator | info: finished 200 ticks"), std::string::npos) << log;
     EXPECT_NE(log.find("air_sim     | info: stopping after frame 200"), std::string::npos) << log;
-    const std::string air = Read(out + "/run1/air_state.csv");
-    const std::string frames = Read(out + "/run1/frames.csv");
+    const auto [air, frames] = ExportCsv(out);
     EXPECT_EQ(std::count(frames.begin(), frames.end(), '\n'), 201) << "a header and one line per frame";
     EXPECT_EQ(std::count(air.begin(), air.end(), '\n'), 201) << "one drone, every frame";
     // The drone reached its target: last line's position.
@@ -100,7 +107,7 @@ TEST(Launcher, CtrlCStopsEveryProcess) {
   const std::string config = WriteTempFile("forever.yaml", Config(out, 0));
   Process up({Bin("lockstep"), "up", config});
   // Wait for the run to be under way: the recorder has written frames.
-  const std::string frames = out + "/run1/frames.csv";
+  const std::string frames = out + "/run1/recording.lslog";
   const auto deadline = std::chrono::steady_clock::now() + 30s;
   while (std::chrono::steady_clock::now() < deadline) {
     if (std::filesystem::exists(frames) && std::filesystem::file_size(frames) > 200) break;

@@ -41,6 +41,11 @@ class CommandProcessor {
 
   // A new run: actors are gone, ids start again at 1.
   void ResetActors();
+  // The live recorder services (kind "recorder"): CMD_RECORDER is accepted only while one runs.
+  void SetRecorders(std::vector<std::string> services) { recorders_ = std::move(services); }
+  // The log a RECORDER_START named (absolute path) until RECORDER_STOP; "" when none.
+  const std::string& recording() const { return recording_; }
+
   // Actors the map brings (traffic lights), so commands can address them.
   uint32_t AddMapActor(const std::string& blueprint, msg::ActorKind kind);
 
@@ -62,6 +67,8 @@ class CommandProcessor {
   std::map<uint32_t, ActorRecord> actors_;
   uint32_t next_actor_ = 1;
   std::vector<msg::Command> pending_;
+  std::vector<std::string> recorders_;
+  std::string recording_;
 };
 
 }  // namespace lockstep

@@ -1,0 +1,249 @@
+// bench/run recorder: the recorder on CARLA's Town01 with 100 Traffic Manager vehicles,
+// 50 AI walkers, the town's traffic lights and 2 flying drones, the coordinator and the
+// ground_sim, air_sim and recorder services on one in-process bus (the services' own
+// code; no DDS transport), at dt 0.05 s:
+//   - tick cost with and without recording, side by side in one run: blocks of ticks that
+//     alternate not recording / recording (start_recorder and stop_recorder between them),
+//     the barrier time per tick (publishing the tick to its last ack) compared block by block;
+//   - MB per simulated hour of the logs written (goal: at most 100 MB/h, half of CARLA's
+//     about 200 MB/h for about 150 actors);
+//   - re-simulation speed: the last log's ticks re-drive fresh services (x real time), with
+//     every world hash compared;
+//   - playback speed: carla.Client.replay_file (the client side's playback) reports it; not
+//     measured here yet (null).
+// JSON lines; the last one is the summary.
+//
+//   bench_recorder [--vehicles N] [--walkers N] [--block N] [--blocks N] [--seed N]
+#include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <numeric>
+#include <thread>
+#include <vector>
+
+#include "air_service.h"
+#include "ground_service.h"
+#include "lockstep/coordinator/coordinator.h"
+#include "lockstep/map/map.h"
+#include "lockstep/recorder/log_reader.h"
+#include "lockstep/recorder/resimulate.h"
+#include "lockstep/runtime/command_builders.h"
+#include "lockstep/runtime/log.h"
+#include "recorder.h"
+
+namespace {
+
+using namespace lockstep;
+
+struct Options {
+  std::string map = std::string(LOCKSTEP_CARLA_MAPS_DIR) + "/Town01.xodr";
+  int vehicles = 100, walkers = 50, block = 100, blocks = 6, warmup = 60;
+  uint64_t seed = 2017;
+};
+
+ScheduledCommand Step(uint64_t frame, msg::CommandBody body, const std::string& alias = "", const std::string& actor_alias = "") {
+  ScheduledCommand s;
+  s.frame = frame;
+  s.alias = alias;
+  s.actor_alias = actor_alias;
+  s.command.client("bench");
+  s.command.sequence_number(frame);
+  s.command.body(body);
+  return s;
+}
+
+// (std::string(1, c) + std::to_string(i): GCC 12's -Wrestrict misfires on "c" + std::string at -O3.)
+std::string Alias(char c, int i) {
+  std::string s(1, c);
+  s += std::to_string(i);
+  return s;
+}
+
+LaunchConfig Config(const Options& o, const std::string& dir, uint64_t ticks) {
+  LaunchConfig c;
+  c.world = DefaultWorldSettings();
+  c.world.service_timeout(120);
+  c.map = o.map;
+  c.seed = o.seed;
+  c.ticks = ticks;
+  c.services.push_back({"air_sim", "air_sim", "", {}, true, false, "never"});
+  c.services.push_back({"ground_sim", "ground_sim", "", {}, true, false, "never"});
+  c.services.push_back({"recorder", "recorder", "", {}, true, true, "never"});
+  const map::Map town = map::Map::Load(o.map);
+  const auto sp = town.SpawnPoints(8.0);
+  for (int i = 0; i < o.vehicles && i < static_cast<int>(sp.size()); ++i) {
+    const auto& p = sp[static_cast<size_t>(i) * sp.size() / static_cast<size_t>(o.vehicles)];
+    const std::string a = Alias('v', i);
+    c.scenario.push_back(Step(1, SpawnBody("vehicle.tesla.model3", MakePose(p.location.x(), p.location.y(), p.location.z() + 0.27, p.yaw)), a));
+    msg::TrafficManagerCommand tm;
+    tm.parameter(msg::TrafficManagerParameter::TM_AUTOPILOT);
+    tm.value(1);
+    msg::CommandBody b;
+    b.traffic_manager(tm);
+    c.scenario.push_back(Step(2, b, "", a));
+  }
+  const auto wp = town.PedestrianSpawnPoints(6.0);
+  for (int i = 0; i < o.walkers && i < static_cast<int>(wp.size()); ++i) {
+    const auto& p = wp[static_cast<size_t>(i) * wp.size() / static_cast<size_t>(o.walkers)];
+    const std::string w = Alias('w', i), ctl = Alias('c', i);
+    c.scenario.push_back(Step(1, SpawnBody("walker.pedestrian.0001", MakePose(p.location.x(), p.location.y(), p.location.z() + 0.42, 0)), w));
+    c.scenario.push_back(Step(2, SpawnBody("controller.ai.walker", MakePose(0, 0, 0)), ctl, w));
+    msg::WalkerAICommand ai;
+    ai.kind(msg::WalkerAIKind::WALKER_AI_START);
+    msg::CommandBody b;
+    b.walker_ai(ai);
+    c.scenario.push_back(Step(3, b, "", ctl));
+  }
+  for (int i = 0; i < 2; ++i) {
+    const std::string d = Alias('d', i);
+    const auto& p = sp.at(static_cast<size_t>(i) * 3 + 1);
+    c.scenario.push_back(Step(1, SpawnBody("drone.generic_quad", MakePose(p.location.x() + 3, p.location.y() + 3, p.location.z() + 15, 0)), d));
+    for (auto [frame, kind] : {std::pair{2ull, msg::DroneCommandKind::DRONE_ARM}, std::pair{3ull, msg::DroneCommandKind::DRONE_TAKEOFF}}) {
+      msg::DroneCommand dc;
+      dc.kind(kind);
+      dc.yaw().is_rate(true);
+      msg::CommandBody b;
+      b.drone(dc);
+      c.scenario.push_back(Step(frame, b, "", d));
+    }
+  }
+  // Alternating blocks after the warm-up: even blocks plain, odd blocks recording.
+  for (int k = 0; k < o.blocks; ++k) {
+    if (k % 2 == 0) continue;
+    const uint64_t start = static_cast<uint64_t>(o.warmup + k * o.block) + 1;
+    msg::RecorderCommand r;
+    r.action(msg::RecorderAction::RECORDER_START);
+    r.name(dir + "/block" + std::to_string(k) + ".lslog");
+    msg::CommandBody b;
+    b.recorder(r);
+    c.scenario.push_back(Step(start, b));
+    msg::RecorderCommand s;
+    s.action(msg::RecorderAction::RECORDER_STOP);
+    msg::CommandBody e;
+    e.recorder(s);
+    c.scenario.push_back(Step(start + static_cast<uint64_t>(o.block), e));
+  }
+  std::stable_sort(c.scenario.begin(), c.scenario.end(), [](const auto& a, const auto& b) { return a.frame < b.frame; });
+  return c;
+}
+
+// Runs the services' cores and the coordinator on one in-process bus. Returns the
+// coordinator's barrier time per completed tick (us).
+std::vector<double> Run(const LaunchConfig& c, bool read_only, const std::function<void(Bus&)>& watch = {}) {
+  auto bus = CreateInProcessBus();
+  if (watch) watch(*bus);
+  Coordinator coordinator(*bus, c);
+  AirService air(*bus, "air_sim");
+  GroundService ground(*bus, "ground_sim");
+  RecorderOptions ro;
+  ro.read_only = read_only;
+  ro.input_timeout_s = 60;
+  Recorder recorder(*bus, ro);
+  ServiceRunner ra(*bus, ServiceOptions{"air_sim", "air_sim", false}, air);
+  ServiceRunner rg(*bus, ServiceOptions{"ground_sim", "ground_sim", false}, ground);
+  ServiceRunner rr(*bus, ServiceOptions{"recorder", "recorder", true}, recorder);
+  std::atomic<bool> stop{false};
+  std::thread ta([&] { ra.Run(stop); }), tg([&] { rg.Run(stop); }), tr([&] { rr.Run(stop); });
+  coordinator.Run(stop);
+  stop = true;
+  ta.join();
+  tg.join();
+  tr.join();
+  return coordinator.stats().barrier_us;
+}
+
+double Median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options o;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    const std::string k = argv[i];
+    const char* v = argv[i + 1];
+    if (k == "--vehicles") o.vehicles = std::atoi(v);
+    else if (k == "--walkers") o.walkers = std::atoi(v);
+    else if (k == "--block") o.block = std::atoi(v);
+    else if (k == "--blocks") o.blocks = std::atoi(v);
+    else if (k == "--seed") o.seed = std::strtoull(v, nullptr, 10);
+    else {
+      std::fprintf(stderr, "bench_recorder: unknown option %s\n", k.c_str());
+      return 2;
+    }
+  }
+  if (o.blocks < 2) o.blocks = 2;
+  InitLogging("bench_recorder");
+  spdlog::set_level(spdlog::level::warn);
+  const std::string dir = (std::filesystem::temp_directory_path() / ("lockstep-bench-recorder-" + std::to_string(getpid()))).string();
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const uint64_t ticks = static_cast<uint64_t>(o.warmup + o.blocks * o.block);
+  const LaunchConfig c = Config(o, dir, ticks);
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::vector<double> barrier = Run(c, false);
+  const double run_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  // Block by block: median barrier time of the plain blocks and of the recording ones.
+  std::vector<double> plain, recording;
+  for (int k = 0; k < o.blocks; ++k) {
+    std::vector<double> b;
+    // Frame f's tick is entry f - 1; skip each block's first and last ticks (start, stop).
+    for (int f = o.warmup + k * o.block + 2; f < o.warmup + (k + 1) * o.block; ++f) {
+      if (static_cast<size_t>(f - 1) < barrier.size()) b.push_back(barrier[static_cast<size_t>(f - 1)]);
+    }
+    const double m = Median(b);
+    (k % 2 ? recording : plain).push_back(m);
+    std::printf("{\"block\":%d,\"recording\":%s,\"ticks\":%zu,\"median_tick_us\":%.1f}\n", k, k % 2 ? "true" : "false", b.size(), m);
+  }
+  const double plain_us = std::accumulate(plain.begin(), plain.end(), 0.0) / static_cast<double>(plain.size());
+  const double rec_us = std::accumulate(recording.begin(), recording.end(), 0.0) / static_cast<double>(recording.size());
+  // Log sizes per simulated hour.
+  uint64_t bytes = 0;
+  double sim_s = 0;
+  std::string last_log;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    recorder::LogReader log(e.path().string());
+    bytes += log.file_size();
+    sim_s += log.duration() + log.header().world.settings().fixed_delta_seconds();
+    if (last_log.empty() || e.path().string() > last_log) last_log = e.path().string();
+  }
+  const double mb_per_hour = sim_s > 0 ? static_cast<double>(bytes) / 1e6 * 3600 / sim_s : 0;
+  std::printf("{\"logs\":\"%s\",\"bytes\":%llu,\"sim_s\":%.2f,\"mb_per_sim_hour\":%.1f}\n", dir.c_str(),
+              static_cast<unsigned long long>(bytes), sim_s, mb_per_hour);
+  std::fflush(stdout);
+  // Re-simulation of the last log.
+  recorder::LogReader log(last_log);
+  const LaunchConfig plan = recorder::ResimulationConfig(log, c);
+  recorder::ResimulationResult result;
+  std::unique_ptr<recorder::ResimulationCheck> check;
+  std::thread waiter;
+  std::atomic<bool> never{false};
+  const auto r0 = std::chrono::steady_clock::now();
+  Run(plan, true, [&](Bus& bus) {
+    check = std::make_unique<recorder::ResimulationCheck>(bus, log);
+    waiter = std::thread([&] { result = check->Wait(300, never); });
+  });
+  waiter.join();
+  const double resim_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - r0).count();
+  const double resim_sim_s = static_cast<double>(log.last_frame()) * c.world.fixed_delta_seconds();
+  std::printf("{\"resimulation\":\"%s\",\"frames_compared\":%llu,\"hashes_equal\":%s,\"reason\":\"%s\",\"wall_s\":%.2f,\"x_real_time\":%.2f}\n",
+              last_log.c_str(), static_cast<unsigned long long>(result.frames_checked), result.ok() ? "true" : "false",
+              result.reason.c_str(), resim_s, resim_sim_s / resim_s);
+  std::printf("{\"summary\":\"recorder\",\"vehicles\":%d,\"walkers\":%d,\"drones\":2,\"dt\":0.05,\"run_wall_s\":%.1f,"
+              "\"median_tick_us_plain\":%.1f,\"median_tick_us_recording\":%.1f,\"tick_cost_ratio\":%.3f,"
+              "\"mb_per_sim_hour\":%.1f,\"resimulation_x_real_time\":%.2f,\"resimulation_hashes_equal\":%s,"
+              "\"playback_x_real_time\":null}\n",
+              o.vehicles, o.walkers, run_s, plain_us, rec_us, plain_us > 0 ? rec_us / plain_us : 0, mb_per_hour, resim_sim_s / resim_s,
+              result.ok() ? "true" : "false");
+  std::filesystem::remove_all(dir);
+  return result.ok() ? 0 : 1;
+}

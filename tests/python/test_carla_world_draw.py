@@ -2,6 +2,7 @@
 occupied spawn point returns None, no ghost actor), world.debug shapes drawn into the
 render service's cameras for their life time, vehicle lights lit at night (set_light_state,
 TrafficManager.update_vehicle_lights), and `lockstep serve`."""
+import contextlib
 import fcntl
 import os
 import signal
@@ -167,47 +168,57 @@ def _night(world):
     world.set_weather(w)
 
 
-@needs_render
-@needs_ground
-def test_at_night_a_cars_low_beams_light_the_road_in_front_of_it(world):
+@contextlib.contextmanager
+def _car_at_night(world, index, blueprint):
+    """A car on the index-th far spawn point under a moonless sky; weather restored after."""
     old = world.get_weather()
     _night(world)
-    sp = _far_spawn_points(world, 3)[2]
-    car = world.spawn_actor(world.get_blueprint_library().find('vehicle.lincoln.mkz_2020'), sp)
-    fwd = sp.get_forward_vector()
-    # 10 m ahead of the car, 3 m up, looking back at it and the road before it.
-    eye = carla.Transform(sp.location + carla.Location(x=fwd.x * 10, y=fwd.y * 10, z=3.0),
-                          carla.Rotation(pitch=-15, yaw=sp.rotation.yaw + 180))
-    cam = Camera(world, eye)
+    sp = _far_spawn_points(world, index + 1)[index]
+    car = world.spawn_actor(world.get_blueprint_library().find(blueprint), sp)
     try:
-        for _ in range(5):
-            off_frame = world.tick()
-        off = cam.frames[off_frame].astype(float)
-        car.set_light_state(carla.VehicleLightState.Position | carla.VehicleLightState.LowBeam)
-        world.tick()
-        on_frame = world.tick()
-        assert car.get_light_state() & carla.VehicleLightState.LowBeam
-        on = cam.frames[on_frame].astype(float)
-        lower = slice(H // 2, H)  # the road between the camera and the car, and the car's front
-        assert on[lower].mean() > off[lower].mean() + 2.0, (on[lower].mean(), off[lower].mean())
-        car.set_light_state(carla.VehicleLightState.NONE)
-        world.tick()
-        dark = cam.frames[world.tick()].astype(float)
-        assert abs(dark[lower].mean() - off[lower].mean()) < 0.5, 'off again'
+        yield car, sp
     finally:
-        cam.destroy()
         car.destroy()
         world.set_weather(old)
         world.tick()
 
 
+@needs_render
+@needs_ground
+def test_at_night_a_cars_low_beams_light_the_road_in_front_of_it(world):
+    with _car_at_night(world, 2, 'vehicle.lincoln.mkz_2020') as (car, sp):
+        fwd = sp.get_forward_vector()
+        # 10 m ahead of the car, 3 m up, looking back at it and the road before it.
+        eye = carla.Transform(sp.location + carla.Location(x=fwd.x * 10, y=fwd.y * 10, z=3.0),
+                              carla.Rotation(pitch=-15, yaw=sp.rotation.yaw + 180))
+        cam = Camera(world, eye)
+        try:
+            _low_beams_light_the_road(world, car, cam)
+        finally:
+            cam.destroy()
+
+
+def _low_beams_light_the_road(world, car, cam):
+    """Low beams on raise the lower half of the image; off again, it is as dark as before."""
+    for _ in range(5):
+        off_frame = world.tick()
+    off = cam.frames[off_frame].astype(float)
+    car.set_light_state(carla.VehicleLightState.Position | carla.VehicleLightState.LowBeam)
+    world.tick()
+    on_frame = world.tick()
+    assert car.get_light_state() & carla.VehicleLightState.LowBeam
+    on = cam.frames[on_frame].astype(float)
+    lower = slice(H // 2, H)  # the road between the camera and the car, and the car's front
+    assert on[lower].mean() > off[lower].mean() + 2.0, (on[lower].mean(), off[lower].mean())
+    car.set_light_state(carla.VehicleLightState.NONE)
+    world.tick()
+    dark = cam.frames[world.tick()].astype(float)
+    assert abs(dark[lower].mean() - off[lower].mean()) < 0.5, 'off again'
+
+
 @needs_ground
 def test_update_vehicle_lights_lets_the_traffic_manager_light_a_car_at_night(world):
-    old = world.get_weather()
-    _night(world)
-    sp = _far_spawn_points(world, 4)[3]
-    car = world.spawn_actor(world.get_blueprint_library().find('vehicle.audi.tt'), sp)
-    try:
+    with _car_at_night(world, 3, 'vehicle.audi.tt') as (car, _):
         tm = carla.Client('localhost', 2000).get_trafficmanager()
         car.set_autopilot(True, tm.get_port())
         for _ in range(3):
@@ -218,10 +229,6 @@ def test_update_vehicle_lights_lets_the_traffic_manager_light_a_car_at_night(wor
             world.tick()
         bits = car.get_light_state()
         assert bits & carla.VehicleLightState.Position and bits & carla.VehicleLightState.LowBeam, bits
-    finally:
-        car.destroy()
-        world.set_weather(old)
-        world.tick()
 
 
 def _another_domain():

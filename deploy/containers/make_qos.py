@@ -9,6 +9,13 @@ it up through LOCKSTEP_QOS_FILE.
 
   make_qos.py --peers 10.89.0.10,10.89.0.11,coordinator [--peer-ids 4] > fastdds.xml
   make_qos.py --discovery-server lockstep-discovery:11811 > fastdds.xml
+  make_qos.py --security [--peers ... | --discovery-server ...] > fastdds.xml
+
+--security adds DDS Security to the profile (deploy/security, docs/deployment.md):
+PKI-DH authentication, access control by the signed governance and permissions documents
+(AES-GCM on the lockstep topics), with the files in pki/ beside the QoS file (${QOS_DIR})
+and each process's certificate chosen by ${IDENTITY} (Lockstep's runtime expands both).
+Without --peers or --discovery-server the transports stay as they are.
 
 Peers are addresses or host names (Fast DDS resolves names when it loads the file). Each
 peer is asked on the well-known ports of participant ids 0 .. peer-ids-1."""
@@ -26,6 +33,24 @@ SERVER_PREFIX = '44.53.00.5f.45.50.52.4f.53.49.4d.41'
 DISCOVERY_TIMES = """            <leaseDuration><sec>10</sec></leaseDuration>
             <leaseAnnouncement><sec>1</sec></leaseAnnouncement>
             <initialAnnouncements><count>5</count><period><nanosec>50000000</nanosec></period></initialAnnouncements>"""
+
+
+SECURITY_FILES = [
+    ('dds.sec.auth.plugin', 'builtin.PKI-DH'),
+    ('dds.sec.auth.builtin.PKI-DH.identity_ca', 'file://${QOS_DIR}/pki/ca.cert.pem'),
+    ('dds.sec.auth.builtin.PKI-DH.identity_certificate', 'file://${QOS_DIR}/pki/${IDENTITY}.cert.pem'),
+    ('dds.sec.auth.builtin.PKI-DH.private_key', 'file://${QOS_DIR}/pki/${IDENTITY}.key.pem'),
+    ('dds.sec.access.plugin', 'builtin.Access-Permissions'),
+    ('dds.sec.access.builtin.Access-Permissions.permissions_ca', 'file://${QOS_DIR}/pki/ca.cert.pem'),
+    ('dds.sec.access.builtin.Access-Permissions.governance', 'file://${QOS_DIR}/pki/governance.p7s'),
+    ('dds.sec.access.builtin.Access-Permissions.permissions', 'file://${QOS_DIR}/pki/permissions.p7s'),
+    ('dds.sec.crypto.plugin', 'builtin.AES-GCM-GMAC'),
+]
+SECURITY = ('        <!-- DDS Security: ${QOS_DIR} is this file\'s folder, ${IDENTITY} the process\'s certificate\n'
+            '             (deploy/security/make_pki.sh makes pki/). -->\n'
+            '        <propertiesPolicy>\n          <properties>\n'
+            + ''.join('            <property><name>%s</name><value>%s</value></property>\n' % p for p in SECURITY_FILES)
+            + '          </properties>\n        </propertiesPolicy>\n')
 
 
 def locator(address, port=None):
@@ -91,9 +116,10 @@ def server_profile(server):
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    mode = ap.add_mutually_exclusive_group(required=True)
+    mode = ap.add_mutually_exclusive_group()
     mode.add_argument('--peers', help='comma-separated addresses or host names of every container/host of the run')
     mode.add_argument('--discovery-server', help='HOST:PORT of a Fast DDS Discovery Server')
+    ap.add_argument('--security', action='store_true', help='add DDS Security (PKI-DH, permissions, AES-GCM)')
     ap.add_argument('--peer-ids', type=int, default=4, help='participant ids asked on each peer (default 4)')
     ap.add_argument('--source', default=DEFAULT_SOURCE, help='the QoS file to start from (deploy/qos/fastdds.xml)')
     ap.add_argument('-o', '--output', help='write here instead of stdout')
@@ -110,8 +136,14 @@ def main():
             if not re.fullmatch(r'[A-Za-z0-9.\-]+', p):
                 raise SystemExit("make_qos.py: peer '%s' is not an address or host name" % p)
         profile = unicast_profile(peers, a.peer_ids)
-    else:
+    elif a.discovery_server is not None:
         profile = server_profile(a.discovery_server)
+    elif a.security:
+        profile = block.search(text).group(0)
+    else:
+        raise SystemExit('make_qos.py: give --peers, --discovery-server or --security')
+    if a.security:
+        profile = profile.replace('      <rtps>\n', '      <rtps>\n' + SECURITY, 1)
     out = block.sub(lambda _: profile, text, count=1)
     if a.peers is not None and a.peer_ids != 4:  # Fast DDS's default range is 4; a setting of the transport
         udp = re.compile(r'(<transport_id>lockstep_udp</transport_id>\s*<type>UDPv4</type>)')

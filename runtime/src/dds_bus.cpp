@@ -12,6 +12,7 @@
 #include <fastdds/dds/topic/TypeSupport.hpp>
 
 #include <cstdlib>
+#include <filesystem>
 #include <map>
 #include <mutex>
 #include <optional>
@@ -34,6 +35,50 @@ uint64_t HandleId(const dds::InstanceHandle_t& h) {
 
 std::string ProfileName(QosKind kind, const char* role) {
   return std::string("lockstep.") + QosFamilyName(kind) + "." + role;
+}
+
+// DDS Security (deploy/security, docs/deployment.md): the dds.sec.* properties of a
+// participant profile may name their files with ${QOS_DIR}, the QoS file's folder, and
+// ${IDENTITY}: LOCKSTEP_SECURITY_IDENTITY, else the participant's name when a certificate
+// of that name exists, else "client". So one QoS file serves every process of a run, each
+// under its own certificate, wherever the file and its pki/ folder are copied.
+void ExpandSecurityProperties(dds::DomainParticipantQos& pqos, const std::string& qos_file, const std::string& name) {
+  auto& props = pqos.properties().properties();
+  auto has_sec = [&] {
+    for (const auto& p : props)
+      if (p.name().rfind("dds.sec.", 0) == 0) return true;
+    return false;
+  };
+  if (!has_sec()) return;
+  const std::string dir = std::filesystem::absolute(qos_file).parent_path().string();
+  auto expand = [&](std::string v, const std::string& identity) {
+    for (const auto& [token, value] : {std::pair<std::string, std::string>{"${QOS_DIR}", dir}, {"${IDENTITY}", identity}}) {
+      for (size_t at = v.find(token); at != std::string::npos; at = v.find(token, at + value.size()))
+        v.replace(at, token.size(), value);
+    }
+    return v;
+  };
+  std::string cert_template;
+  for (const auto& p : props)
+    if (p.name() == "dds.sec.auth.builtin.PKI-DH.identity_certificate") cert_template = p.value();
+  auto cert_file = [&](const std::string& identity) {
+    std::string f = expand(cert_template, identity);
+    return f.rfind("file://", 0) == 0 ? f.substr(7) : f;  // Fast DDS takes file://PATH
+  };
+  std::string identity;
+  if (const char* env = std::getenv("LOCKSTEP_SECURITY_IDENTITY"); env && *env) {
+    identity = env;
+  } else {
+    identity = !cert_template.empty() && std::filesystem::exists(cert_file(name)) ? name : "client";
+  }
+  if (!cert_template.empty() && !std::filesystem::exists(cert_file(identity))) {
+    throw InputError("DDS Security (" + qos_file + "): no certificate " + cert_file(identity) + " for identity '" + identity +
+                     "' (make one with deploy/security/make_pki.sh)");
+  }
+  for (auto& p : props) {
+    if (p.name().rfind("dds.sec.", 0) == 0) p.value() = expand(p.value(), identity);
+  }
+  spdlog::info("DDS Security on: participant '{}' authenticates as '{}'", name, identity);
 }
 
 class DdsWriter final : public RawWriter {
@@ -134,6 +179,7 @@ class DdsBus final : public Bus {
       throw InputError("QoS file '" + file + "' has no participant profile '" + options.participant_profile + "'");
     }
     pqos.name(options.participant_name);
+    ExpandSecurityProperties(pqos, file, options.participant_name);
     {
       // Choosing and taking the id under a lock: processes starting at once pick different ones.
       std::optional<runtime::ParticipantIdLock> lock;
@@ -150,7 +196,8 @@ class DdsBus final : public Bus {
       participant_ = factory->create_participant(options.domain_id, pqos);
     }
     if (!participant_) {
-      throw InputError("cannot create a DDS participant on domain " + std::to_string(options.domain_id));
+      throw InputError("cannot create a DDS participant on domain " + std::to_string(options.domain_id) +
+                       " (with DDS Security: are the certificates, governance and permissions valid and signed by the CA?)");
     }
     publisher_ = participant_->create_publisher(dds::PUBLISHER_QOS_DEFAULT);
     subscriber_ = participant_->create_subscriber(dds::SUBSCRIBER_QOS_DEFAULT);

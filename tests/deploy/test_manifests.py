@@ -202,6 +202,8 @@ def test_the_qos_files_are_what_make_qos_makes_from_the_current_profiles():
         'regenerate: deploy/containers/make_qos.py --discovery-server lockstep-discovery:11811 -o deploy/k8s/fastdds.xml'
     assert open(os.path.join(DEPLOY, 'compose', 'fastdds.xml')).read() == make_qos('--discovery-server', 'discovery:11811'), \
         'regenerate: deploy/containers/make_qos.py --discovery-server discovery:11811 -o deploy/compose/fastdds.xml'
+    assert open(os.path.join(DEPLOY, 'security', 'fastdds.xml')).read() == make_qos('--security'), \
+        'regenerate: deploy/containers/make_qos.py --security -o deploy/security/fastdds.xml'
 
 
 def test_make_qos_rejects_bad_input():

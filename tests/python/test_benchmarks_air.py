@@ -32,3 +32,4 @@ def test_precision_landing_over_seeds(tmp_path):
         assert len({r['episode'] for r in results} | {r['car_speed_kmh'] for r in results}) > 1
     finally:
         sim.stop()
+

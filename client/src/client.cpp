@@ -29,6 +29,35 @@ namespace {
 using Clock = std::chrono::steady_clock;
 using RunFrame = std::pair<uint32_t, uint64_t>;
 
+// a * b of two poses (b given in a's frame).
+msg::Quaternion QMul(const msg::Quaternion& a, const msg::Quaternion& b) {
+  msg::Quaternion q;
+  q.w(a.w() * b.w() - a.x() * b.x() - a.y() * b.y() - a.z() * b.z());
+  q.x(a.w() * b.x() + a.x() * b.w() + a.y() * b.z() - a.z() * b.y());
+  q.y(a.w() * b.y() - a.x() * b.z() + a.y() * b.w() + a.z() * b.x());
+  q.z(a.w() * b.z() + a.x() * b.y() - a.y() * b.x() + a.z() * b.w());
+  return q;
+}
+msg::Vector3 QRotate(const msg::Quaternion& q, double x, double y, double z) {
+  msg::Quaternion v;
+  v.w(0), v.x(x), v.y(y), v.z(z);
+  msg::Quaternion c;
+  c.w(q.w()), c.x(-q.x()), c.y(-q.y()), c.z(-q.z());
+  const msg::Quaternion r = QMul(QMul(q, v), c);
+  msg::Vector3 out;
+  out.x(r.x()), out.y(r.y()), out.z(r.z());
+  return out;
+}
+msg::Pose Compose(const msg::Pose& a, const msg::Pose& b) {
+  const msg::Vector3 p = QRotate(a.orientation(), b.position().x(), b.position().y(), b.position().z());
+  msg::Pose out;
+  msg::Vector3 pos;
+  pos.x(a.position().x() + p.x()), pos.y(a.position().y() + p.y()), pos.z(a.position().z() + p.z());
+  out.position(pos);
+  out.orientation(QMul(a.orientation(), b.orientation()));
+  return out;
+}
+
 Clock::time_point Deadline(double seconds) {
   if (seconds < 0) return Clock::time_point::max();
   return Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(seconds));
@@ -482,26 +511,50 @@ struct Client::Impl {
     return out;
   }
 
-  // A destroyed actor, with its children (the coordinator destroys them with it). A
-  // destroyed sensor delivers no more data: a tick() stops waiting for it.
+  // Where actor `id` carries what is attached to it, in its newest state of this run (the
+  // services' mount: a vehicle's or walker's box bottom, a drone's centre); none without a state.
+  std::optional<msg::Pose> LastMount(uint32_t id) const {
+    for (auto r = ground.rbegin(); r != ground.rend(); ++r) {
+      if (r->first.first != actors_run) continue;
+      auto bottom = [](const auto& s) {
+        msg::Pose down;
+        msg::Vector3 v;
+        v.z(-s.half_extents().z());
+        down.position(v);
+        msg::Quaternion one;
+        one.w(1);
+        down.orientation(one);
+        return Compose(s.transform(), down);
+      };
+      for (const auto& v : r->second->vehicles()) if (v.actor() == id) return bottom(v);
+      for (const auto& w : r->second->walkers()) if (w.actor() == id) return bottom(w);
+      break;
+    }
+    for (auto r = air.rbegin(); r != air.rend(); ++r) {
+      if (r->first.first != actors_run) continue;
+      for (const auto& d : r->second->drones()) if (d.actor() == id) return d.transform();
+      break;
+    }
+    return std::nullopt;
+  }
+
+  // A destroyed actor. What was attached to it stays, detached at its last world pose, as
+  // CARLA's (only the actor is destroyed; Unreal detaches its children keeping their world
+  // transform). A destroyed sensor delivers no more data: a tick() stops waiting for it.
   void RemoveActor(uint32_t id) {
+    const std::optional<msg::Pose> mount = LastMount(id);
     actors.erase(id);
     listeners.erase(id);
     removed.insert({actors_run, id});
-    {
-      auto& shared = Shared();
-      std::lock_guard<std::mutex> lock(shared.mu);
-      auto it = shared.by_run.find({options.domain, actors_run});
-      if (it != shared.by_run.end()) it->second.erase(id);
-    }
-    for (auto it = actors.begin(); it != actors.end();) {
-      if (it->second.parent == id) {
-        const uint32_t child = it->first;
-        RemoveActor(child);
-        it = actors.upper_bound(child);
-      } else {
-        ++it;
-      }
+    auto& shared = Shared();
+    std::lock_guard<std::mutex> lock(shared.mu);
+    auto it = shared.by_run.find({options.domain, actors_run});
+    if (it != shared.by_run.end()) it->second.erase(id);
+    for (auto& [child, a] : actors) {
+      if (a.parent != id) continue;
+      a.parent = 0;
+      if (mount) a.spawn_pose = Compose(*mount, a.spawn_pose);
+      if (it != shared.by_run.end() && it->second.count(child)) it->second[child] = a;
     }
   }
 
@@ -520,7 +573,9 @@ struct Client::Impl {
       listed.insert(id);
       if (removed.count({l.run(), id})) continue;
       auto it = l.run() == actors_run ? actors.find(id) : actors.end();
-      if (it == actors.end() || it->second.owner.empty()) AddActor(l.run(), a.frame(), a.spawn(), id);  // new, or seen in a state only
+      // New, or seen in a state only; not one we detached from its destroyed parent.
+      const bool detached = it != actors.end() && it->second.parent == 0 && a.spawn().parent() != 0;
+      if (it == actors.end() || (it->second.owner.empty() && !detached)) AddActor(l.run(), a.frame(), a.spawn(), id);
     }
     if (l.run() != actors_run) return;
     std::vector<uint32_t> gone;

@@ -403,14 +403,14 @@ msg::CommandReply CommandProcessor::Submit(const msg::Command& cmd, uint32_t run
       break;
     }
     case CommandKind::CMD_DESTROY_ACTOR: {
-      // Children go with their parent, as attached sensors do.
-      std::vector<uint32_t> doomed{b.destroy_actor().actor()};
-      for (size_t i = 0; i < doomed.size(); ++i) {
-        for (const auto& [id, rec] : actors_) {
-          if (rec.parent == doomed[i]) doomed.push_back(id);
-        }
+      // Only the actor goes, as CARLA's UActorDispatcher::DestroyActor: Unreal detaches what
+      // was attached to it, keeping its world transform (UWorld::DestroyActor), so attached
+      // sensors live on where they were, unattached.
+      const uint32_t gone = b.destroy_actor().actor();
+      actors_.erase(gone);
+      for (auto& [id, rec] : actors_) {
+        if (rec.parent == gone) rec.parent = 0;
       }
-      for (uint32_t id : doomed) actors_.erase(id);
       break;
     }
     case CommandKind::CMD_TICK:

@@ -630,15 +630,10 @@ struct Coordinator::Impl {
         list.push_back(std::move(a));
         changed = true;
       } else if (b._d() == msg::CommandKind::CMD_DESTROY_ACTOR) {
-        std::vector<uint32_t> doomed{b.destroy_actor().actor()};  // children go with their parent
-        for (size_t i = 0; i < doomed.size(); ++i) {
-          for (const auto& a : list) {
-            if (a.spawn().parent() == doomed[i]) doomed.push_back(a.spawn().actor());
-          }
-        }
-        std::erase_if(list, [&](const msg::ActorSpawned& a) {
-          return std::find(doomed.begin(), doomed.end(), a.spawn().actor()) != doomed.end();
-        });
+        // Only the actor (CARLA): what was attached to it stays listed, detached where it was
+        // (its spawn still names the parent, which is gone: clients read that as detached).
+        const uint32_t gone = b.destroy_actor().actor();
+        std::erase_if(list, [&](const msg::ActorSpawned& a) { return a.spawn().actor() == gone; });
         changed = true;
       }
     }

@@ -109,6 +109,7 @@ struct RenderService::CameraRecord {
   Writer<msg::Image> writer;
   double last_capture = -1e300;
   std::optional<render::Pose> last_pose;
+  std::optional<render::Pose> world_pose;  // at the last frame drawn that found its parent
   std::unique_ptr<render::DvsSensor> dvs;
   render::AutoExposure exposure;  // colour cameras: adapts from image to image (histogram mode)
   double exposure_dt = 0;         // s of simulated time since the camera's previous image
@@ -407,6 +408,14 @@ void RenderService::Apply(const msg::Command& c, const msg::FrameStamp& stamp) {
       const uint32_t id = b.destroy_actor().actor();
       spawned_.erase(id);
       cameras_.erase(id);
+      // CARLA destroys only the actor; Unreal detaches its cameras keeping their world
+      // transform: they stay and draw from where they were.
+      for (auto& [cid, cam] : cameras_) {
+        if (cam->parent != id) continue;
+        cam->parent = 0;
+        if (cam->world_pose) cam->relative = *cam->world_pose;
+        if (auto r = spawned_.find(cid); r != spawned_.end()) r->second.parent = 0, r->second.transform = cam->relative;
+      }
       return;
     }
     case msg::CommandKind::CMD_SET_TRANSFORM: {
@@ -580,6 +589,9 @@ void RenderService::Step(const msg::Tick& tick) {
   };
   std::vector<Pass> passes;
   for (auto& [id, cam] : cameras_) {
+    if (cam->parent) {
+      if (auto p = mounts.find(cam->parent); p != mounts.end()) cam->world_pose = p->second * cam->relative;
+    }
     const double tick_s = cam->settings.sensor_tick;
     if (tick_s > 0 && stamp.sim_time() - cam->last_capture < tick_s - 1e-9) continue;
     render::Pose pose = cam->relative;

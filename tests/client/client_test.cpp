@@ -318,7 +318,9 @@ TEST_F(ClientTest, ALateSensorIsNamedAndItsDataStillArrivesOnce) {
   EXPECT_FALSE(client_->is_listening(good));
 }
 
-TEST_F(ClientTest, ASensorDestroyedWithItsParentIsNoLongerAwaitedByTick) {
+// CARLA destroys only the actor; Unreal detaches what was attached to it keeping its world
+// transform: the IMU stays, unattached where the drone carried it, and is still listened to.
+TEST_F(ClientTest, ASensorOfADestroyedParentStaysDetachedWhereItWas) {
   Start(true, /*skip_frame=*/0, /*sensor_timeout=*/0.5);
   const uint32_t drone = client_->spawn("drone.generic_quad", MakePose(47.75, 1.75, 0));
   const uint32_t imu = client_->spawn("sensor.other.imu", MakePose(0, 0, 0.2), {}, drone);
@@ -326,9 +328,25 @@ TEST_F(ClientTest, ASensorDestroyedWithItsParentIsNoLongerAwaitedByTick) {
   client_->listen(imu, [&](const SensorSample&) { ++count; });
   for (int i = 0; i < 3; ++i) client_->tick();
   EXPECT_GE(count.load(), 2);
-  client_->destroy(drone);  // the IMU goes with it
-  EXPECT_FALSE(client_->is_listening(imu));
+  const auto carrier = client_->snapshot().Find(drone);
+  ASSERT_TRUE(carrier.has_value());
+  client_->destroy(drone);
+  EXPECT_TRUE(client_->is_listening(imu));
+  const auto info = client_->actor(imu);
+  ASSERT_TRUE(info.has_value());
+  EXPECT_EQ(info->parent, 0u);
+  // Its world pose: the drone's last pose (its centre is its mount) times the mount transform.
+  const auto& p = info->spawn_pose.position();
+  const auto& d = carrier->transform.position();
+  const auto& q = carrier->transform.orientation();
+  const double up_x = 2 * (q.x() * q.z() + q.w() * q.y()), up_y = 2 * (q.y() * q.z() - q.w() * q.x()),
+               up_z = 1 - 2 * (q.x() * q.x() + q.y() * q.y());  // the drone's z axis in the world
+  EXPECT_NEAR(p.x(), d.x() + 0.2 * up_x, 1e-9);
+  EXPECT_NEAR(p.y(), d.y() + 0.2 * up_y, 1e-9);
+  EXPECT_NEAR(p.z(), d.z() + 0.2 * up_z, 1e-9);
+  const int before = count.load();
   for (int i = 0; i < 3; ++i) EXPECT_NO_THROW(client_->tick());
+  EXPECT_GE(count.load(), before + 2);  // it samples on
 }
 
 TEST_F(ClientTest, ASensorOfAnEarlierRunIsNoLongerAwaitedByTick) {

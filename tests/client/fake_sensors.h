@@ -44,15 +44,12 @@ class FakeSensors final : public ServiceCore {
           images_[s.actor()] = Writer<msg::Image>(bus_, Topic<msg::Image>{topic.c_str(), QosKind::kImage});
         }
       } else if (b._d() == msg::CommandKind::CMD_DESTROY_ACTOR) {
-        // As the coordinator does: a sensor goes with the actor it is attached to.
+        // As CARLA's: only the actor goes; a sensor attached to it stays, detached.
         const uint32_t doomed = b.destroy_actor().actor();
-        for (auto it = sensors_.begin(); it != sensors_.end();) {
-          if (it->first == doomed || it->second.parent == doomed) {
-            images_.erase(it->first);
-            it = sensors_.erase(it);
-          } else {
-            ++it;
-          }
+        images_.erase(doomed);
+        sensors_.erase(doomed);
+        for (auto& [id, s] : sensors_) {
+          if (s.parent == doomed) s.parent = 0;
         }
       }
     }

@@ -206,7 +206,9 @@ TEST_F(CommandProcessorTest, NonUnitQuaternionIsRejected) {
   EXPECT_NE(r.reason().to_string().find("unit quaternion"), std::string::npos) << r.reason();
 }
 
-TEST_F(CommandProcessorTest, DestroyTakesAttachedSensorsAlong) {
+// CARLA destroys only the actor; Unreal detaches its children keeping their world
+// transform (UWorld::DestroyActor): the camera lives on, unattached.
+TEST_F(CommandProcessorTest, DestroyDetachesAttachedSensors) {
   const uint32_t car = Submit(Spawn("vehicle.lockstep.sedan")).actor();
   const uint32_t cam = Submit(Spawn("sensor.camera.rgb", {}, car)).actor();
   msg::DestroyActor d;
@@ -214,8 +216,13 @@ TEST_F(CommandProcessorTest, DestroyTakesAttachedSensorsAlong) {
   msg::CommandBody b;
   b.destroy_actor(d);
   EXPECT_TRUE(Submit(Make(b)).accepted());
-  EXPECT_EQ(p.actors().count(cam), 0u);
+  EXPECT_EQ(p.actors().count(car), 0u);
+  ASSERT_EQ(p.actors().count(cam), 1u);
+  EXPECT_EQ(p.actors().at(cam).parent, 0u);
   EXPECT_FALSE(Submit(Make(b)).accepted()) << "destroying twice";
+  d.actor(cam);
+  b.destroy_actor(d);
+  EXPECT_TRUE(Submit(Make(b)).accepted()) << "the detached camera is destroyed on its own";
 }
 
 TEST_F(CommandProcessorTest, TickRequestsNeedSynchronousMode) {

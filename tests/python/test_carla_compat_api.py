@@ -223,18 +223,45 @@ def test_physics_control_answers_right_after_spawn(world):
 def test_destroy_of_an_actor_already_gone_warns_and_returns_false(world, capfd):
     bp = world.get_blueprint_library().find('vehicle.audi.tt')
     car, _ = _free_spawn(world, bp)
-    sensors = world.get_blueprint_library().filter('sensor.other.collision')
-    child = world.spawn_actor(sensors[0], carla.Transform(), attach_to=car) if len(sensors) else None
     world.tick()
     assert car.destroy() is True
     world.tick()
     capfd.readouterr()
     assert car.destroy() is False  # a second destroy
-    if child is not None:
-        assert not child.is_alive
-        assert child.destroy() is False  # destroyed with its parent (Lockstep; CARLA detaches it)
     err = capfd.readouterr().err
     assert 'WARNING: attempting to destroy an actor that is already dead: Actor %d (vehicle.audi.tt)' % car.id in err
+
+
+@ground
+def test_destroying_a_parent_leaves_its_sensor_detached_where_it_was(world):
+    # CARLA destroys only the actor (UActorDispatcher::DestroyActor); Unreal detaches what was
+    # attached to it keeping its world transform: the sensor lives on, standing there.
+    lib = world.get_blueprint_library()
+    gnss = lib.filter('sensor.other.gnss')
+    if not len(gnss):
+        pytest.skip('no GNSS blueprint')
+    car, _ = _free_spawn(world, lib.find('vehicle.audi.tt'))
+    sensor = world.spawn_actor(gnss[0], carla.Transform(carla.Location(x=1.0, z=2.0)), attach_to=car)
+    got = []
+    sensor.listen(got.append)
+    try:
+        for _ in range(10):
+            world.tick()
+        assert got and got[-1].transform.location.distance(sensor.get_transform().location) < 0.01
+        before = sensor.get_transform()
+        assert car.destroy() is True
+        for _ in range(3):
+            world.tick()
+        assert sensor.is_alive and sensor.parent is None
+        assert sensor.get_transform().location.distance(before.location) < 0.01
+        n = len(got)
+        world.tick()
+        world.tick()
+        assert len(got) > n  # it samples on, where it stood
+        assert got[-1].transform.location.distance(before.location) < 0.01
+    finally:
+        sensor.stop()
+    assert sensor.destroy() is True  # on its own
 
 
 @ground

@@ -179,12 +179,19 @@ class Actor:
     def _state(self):
         return self._world._client.state(self.id)
 
+    def _live_info(self):
+        """The client's current record: an actor attached to a parent that was destroyed is
+        detached there (parent 0, its last world pose), as CARLA's."""
+        info = self._world._client.actor(self.id)
+        return info if info is not None else self._info
+
     def _wire_pose(self):
         s = self._state()
         if s is not None:
             return s['transform']
-        parent = self._info.get('parent', 0)
-        rel = self._info.get('spawn_transform', (0, 0, 0, 1, 0, 0, 0))
+        info = self._live_info()
+        parent = info.get('parent', 0)
+        rel = info.get('spawn_transform', (0, 0, 0, 1, 0, 0, 0))
         if parent:
             p = self._world._client.state(parent)
             if p is None:
@@ -194,6 +201,10 @@ class Actor:
                 pp = pa._wire_pose()
             else:
                 pp = p['transform']
+                if p.get('kind') in ('vehicle', 'walker'):
+                    # Mounted where the services mount it (CARLA's vehicle origin): the box bottom.
+                    down = _qrot(pp[3:], (0.0, 0.0, -p['half_extents'][2]))
+                    pp = (pp[0] + down[0], pp[1] + down[1], pp[2] + down[2]) + tuple(pp[3:])
             pos = _qrot(pp[3:], rel[:3])
             q = _qmul(pp[3:], rel[3:])
             return (pp[0] + pos[0], pp[1] + pos[1], pp[2] + pos[2]) + q
@@ -201,7 +212,7 @@ class Actor:
 
     @property
     def parent(self):
-        p = self._info.get('parent', 0)
+        p = self._live_info().get('parent', 0)
         return self._world.get_actor(p) if p else None
 
     @property
@@ -315,8 +326,9 @@ class Actor:
         self._world._constant_velocity.pop(self.id, None)
 
     def destroy(self):
-        """True once destroyed. An actor already gone (destroyed before, or with the parent it
-        was attached to) logs CARLA's warning and returns False, as CARLA's Actor::Destroy."""
+        """True once destroyed. An actor already gone (destroyed before) logs CARLA's warning
+        and returns False, as CARLA's Actor::Destroy. Only this actor goes: what is attached to
+        it stays, detached at its last world pose (CARLA's Unreal keeps their world transform)."""
         if self._destroyed or self._world._client.actor(self.id) is None:
             return self._already_dead()
         try:

@@ -340,3 +340,40 @@ TEST_F(CommandProcessorTest, UpdateVehicleLightsNeedsAVehicle) {
 
 }  // namespace
 }  // namespace lockstep
+
+namespace lockstep {
+namespace {
+
+msg::Command V2XSend(uint32_t sensor, const std::string& text) {
+  msg::V2XSend v;
+  v.sensor(sensor);
+  v.data(text);
+  msg::CommandBody b;
+  b.v2x_send(v);
+  return Make(b);
+}
+
+TEST_F(CommandProcessorTest, V2XSendGoesOnlyToACustomV2XSensor) {
+  p.library().Declare(Declare("sensors", {blueprint::Make("sensor.other.v2x_custom", msg::ACTOR_SENSOR, {blueprint::String("role_name", "")}),
+                                          blueprint::Make("sensor.other.v2x", msg::ACTOR_SENSOR, {blueprint::String("role_name", "")})}));
+  auto custom = Submit(Spawn("sensor.other.v2x_custom"));
+  auto cam = Submit(Spawn("sensor.other.v2x"));
+  ASSERT_TRUE(custom.accepted()) << custom.reason();
+  ASSERT_TRUE(cam.accepted()) << cam.reason();
+  p.TakePending();
+  auto r = Submit(V2XSend(custom.actor(), "hello"));
+  ASSERT_TRUE(r.accepted()) << r.reason();
+  auto pending = p.TakePending();
+  ASSERT_EQ(pending.size(), 1u);
+  EXPECT_EQ(pending[0].body().v2x_send().data().to_string(), "hello");
+  r = Submit(V2XSend(cam.actor(), "hello"));
+  EXPECT_FALSE(r.accepted());
+  EXPECT_NE(r.reason().to_string().find("is a sensor.other.v2x, not a sensor.other.v2x_custom"), std::string::npos) << r.reason();
+  r = Submit(V2XSend(999, "hello"));
+  EXPECT_FALSE(r.accepted());
+  EXPECT_NE(r.reason().to_string().find("unknown actor 999"), std::string::npos) << r.reason();
+  EXPECT_TRUE(p.TakePending().empty());
+}
+
+}  // namespace
+}  // namespace lockstep

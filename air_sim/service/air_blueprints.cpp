@@ -24,7 +24,9 @@ std::string Format(double x) {
 }
 
 std::vector<msg::AttributeDeclaration> DroneAttributes(const std::string& frame) {
-  std::vector<msg::AttributeDeclaration> v{blueprint::String("role_name", "")};
+  // api_control: AirSim's enableApiControl state at spawn (the airsim clients spawn their vehicles
+  // without it, as AirSim's; Lockstep's own drone commands find it on).
+  std::vector<msg::AttributeDeclaration> v{blueprint::String("role_name", ""), blueprint::Bool("api_control", true)};
   air::MultirotorParams p;
   struct Visitor {
     std::vector<msg::AttributeDeclaration>* out;
@@ -65,7 +67,9 @@ std::vector<msg::BlueprintDeclaration> AirBlueprints() {
 air::MultirotorParams AirSpawnParams(const msg::SpawnActor& spawn) {
   std::map<std::string, std::string> attrs;
   for (const auto& a : spawn.attributes()) {
-    if (a.key().to_string() != "role_name") attrs[a.key().to_string()] = a.value().to_string();
+    if (a.key().to_string() != "role_name" && a.key().to_string() != "api_control") {
+      attrs[a.key().to_string()] = a.value().to_string();
+    }
   }
   if (!attrs.count("frame")) attrs["frame"] = DefaultFrame(spawn.blueprint().to_string());
   return air::ParamsFromAttributes(attrs);

@@ -129,6 +129,9 @@ std::optional<air::CommandBody> ToAirCommand(const msg::DroneCommand& d, std::st
       if (v.size() >= 10) k.angular_velocity = air::Vec3(v[7], v[8], v[9]);
       return k;
     }
+    case K::DRONE_SET_API_CONTROL:
+      if (!need(1)) return std::nullopt;
+      return air::cmd::SetApiControl{v[0] != 0};
     case K::DRONE_MOVE_TO_GPS:
     case K::DRONE_SET_WIND:
       *why = "mapped by the service (needs the map's geo-reference / applies to every drone)";
@@ -290,13 +293,20 @@ void AirService::Apply(const msg::Command& c, uint64_t frame, air::Commands* out
       const std::string bp = s.blueprint().to_string();
       if (s.owner().to_string() != name_) return;  // the coordinator names who simulates it
       std::map<std::string, std::string> attrs;
+      bool api_control = true;  // Lockstep's own commands drive a drone at once; AirSim's clients spawn without
       for (const auto& a : s.attributes()) {
-        if (a.key().to_string() != "role_name") attrs[a.key().to_string()] = a.value().to_string();
+        const std::string key = a.key().to_string();
+        if (key == "api_control") {
+          api_control = a.value().to_string() == "true" || a.value().to_string() == "1";
+        } else if (key != "role_name") {
+          attrs[key] = a.value().to_string();
+        }
       }
       if (bp == "drone.quad_plus" && !attrs.count("frame")) attrs["frame"] = "quad_plus";
       if (bp == "drone.hexa_x" && !attrs.count("frame")) attrs["frame"] = "hexa_x";
       try {
         air::AddDrone(&model_, &state_, s.actor(), air::ParamsFromAttributes(attrs), ToPose(s.transform()));
+        state_.Find(s.actor())->api_control = api_control;
         blueprints_[s.actor()] = bp;
       } catch (const std::exception& e) {
         Fail(stamp, s.actor(), std::string("spawn failed: ") + e.what());
@@ -424,7 +434,9 @@ void AirService::Step(const msg::Tick& tick) {
   stamp.frame(tick.frame());
   stamp.sim_time(tick.sim_time());
   for (const auto& r : state_.reports) {
-    last_command_[r.drone] = {r.id, ToWire(r.status)};
+    // Id 0: a command of no client's future (set_transform, enableApiControl), which must not
+    // look like the end of the drone's running command.
+    if (r.id != 0) last_command_[r.drone] = {r.id, ToWire(r.status)};
     if (r.status == air::CommandStatus::kRejected) Fail(stamp, r.drone, "command " + std::to_string(r.id) + " rejected: " + r.message);
   }
   for (const auto& e : state_.events) {
@@ -497,6 +509,7 @@ msg::AirState AirService::Publish(const msg::FrameStamp& stamp) const {
     d.rotors(rotors);
     d.landed(s.landed == air::LandedState::kLanded ? msg::LandedState::LANDED_LANDED : msg::LandedState::LANDED_FLYING);
     d.armed(s.armed);
+    d.api_control(s.api_control);
     msg::CollisionInfo c;
     c.has_collided(s.collision.has_collided);
     c.other_kind(ToWire(s.collision.kind));

@@ -214,6 +214,7 @@ struct Client::Impl {
   std::mutex reader_mu;             // creation of the sensor readers
   std::map<SensorType, std::shared_ptr<void>> sensor_readers;
   std::map<uint32_t, std::shared_ptr<void>> image_readers;  // cameras: one topic each
+  std::map<uint32_t, std::shared_ptr<void>> large_image_readers;  // ... and their large_image topic
   // Images and point clouds change hands without a copy (sample_pool.h).
   std::shared_ptr<SamplePool<msg::Image>> image_pool = std::make_shared<SamplePool<msg::Image>>(4);
   std::shared_ptr<SamplePool<msg::PointCloud>> cloud_pool = std::make_shared<SamplePool<msg::PointCloud>>(4);
@@ -341,6 +342,7 @@ struct Client::Impl {
       std::lock_guard<std::mutex> lock(reader_mu);
       sensor_readers.clear();
       image_readers.clear();
+      large_image_readers.clear();
     }
     Stop();
     if (commands && commands.MatchedReaders() > 0) commands.WaitForAcknowledgments(0.5);
@@ -742,12 +744,35 @@ struct Client::Impl {
     sensor_readers[type] = reader;
   }
 
-  void EnsureSensorReader(SensorType type, uint32_t sensor) {
+  // A camera's images come on its image topic, or on its large_image topic when they exceed
+  // Image's bound (8294400 bytes): a camera of more than 8294400 / 8 pixels (8 bytes per pixel
+  // at most, optical flow) or of unknown size (pixels 0) is read on both.
+  void EnsureSensorReader(SensorType type, uint32_t sensor, std::size_t pixels = 0) {
     std::lock_guard<std::mutex> lock(reader_mu);
     if (type == SensorType::kImage) {
       if (image_readers.count(sensor)) return;
       const std::string name = topics::ImageTopicName(sensor);
       image_readers[sensor] = MakeTakingReader(SensorType::kImage, Topic<msg::Image>{name.c_str(), QosKind::kImage}, image_pool);
+      if (pixels == 0 || pixels * 8 > 8294400) {
+        const std::string large = topics::LargeImageTopicName(sensor);
+        // Delivered as the msg::Image it would have been (the bound is the wire's, not the type's).
+        large_image_readers[sensor] = std::make_shared<TakingReader<msg::LargeImage>>(
+            *bus, Topic<msg::LargeImage>{large.c_str(), QosKind::kLargeImage}, [this](msg::LargeImage& m, const SampleInfo&) {
+              auto img = std::make_shared<msg::Image>();
+              img->sensor(m.sensor());
+              img->stamp(m.stamp());
+              img->sensor_pose(m.sensor_pose());
+              img->width(m.width());
+              img->height(m.height());
+              img->step(m.step());
+              img->encoding(m.encoding());
+              img->fov(m.fov());
+              img->data().swap(m.data());
+              const uint32_t id = img->sensor();
+              const msg::FrameStamp stamp = img->stamp();
+              OnSensor(SensorType::kImage, id, stamp, std::move(img));
+            });
+      }
       return;
     }
     if (sensor_readers.count(type)) return;
@@ -1179,7 +1204,15 @@ void Client::listen(uint32_t sensor, SensorCallback callback) {
   if (!SensorTypeOf(info->blueprint, &type)) {
     throw ClientError("listen(): actor " + std::to_string(sensor) + " (" + info->blueprint + ") is not a sensor");
   }
-  impl_->EnsureSensorReader(type, sensor);
+  std::size_t pixels = 0;
+  if (type == SensorType::kImage) {
+    try {
+      pixels = std::stoul(info->Attribute("image_size_x", "0")) * std::stoul(info->Attribute("image_size_y", "0"));
+    } catch (const std::exception&) {
+      pixels = 0;  // unknown: both topics
+    }
+  }
+  impl_->EnsureSensorReader(type, sensor, pixels);
   std::lock_guard<std::mutex> lock(impl_->mu);
   Impl::Listener l;
   l.type = type;

@@ -117,14 +117,39 @@ std::vector<std::string> MultirotorClient::listVehicles() const {
 }
 
 uint32_t MultirotorClient::addVehicle(const std::string& name, const std::string& blueprint, const msg::Pose& pose) {
-  return client_.spawn(blueprint, pose, {{"role_name", name}});
+  // AirSim's vehicles start without API control (enableApiControl takes it).
+  return client_.spawn(blueprint, pose, {{"role_name", name}, {"api_control", "false"}});
 }
 
-void MultirotorClient::enableApiControl(bool enabled, const std::string& vehicle) { api_control_[Resolve(vehicle)] = enabled; }
+// API control is the vehicle's (air_sim's DroneState.api_control), whichever client or process
+// takes it, as AirSim's server holds it. Until the tick that carries this client's request is
+// in the air state, the request is the answer (AirSim's call returns once the server has it).
+void MultirotorClient::enableApiControl(bool enabled, const std::string& vehicle) {
+  const uint32_t id = Resolve(vehicle);
+  msg::DroneCommand c = MakeUnchecked(id, msg::DroneCommandKind::DRONE_SET_API_CONTROL);
+  c.values(std::vector<double>{enabled ? 1.0 : 0.0});
+  c.command_id(0);  // no future waits on it: it must not look like the end of the running command
+  msg::CommandBody b;
+  b.drone(c);
+  const msg::CommandReply r = client_.Submit(std::move(b));
+  std::lock_guard<std::mutex> lock(api_mu_);
+  api_pending_[id] = PendingApiControl{enabled, r.run(), r.frame()};
+}
 
 bool MultirotorClient::isApiControlEnabled(const std::string& vehicle) const {
-  auto it = api_control_.find(Resolve(vehicle));
-  return it != api_control_.end() && it->second;
+  const uint32_t id = Resolve(vehicle);
+  const Snapshot snap = client_.snapshot();
+  const msg::DroneState* d = snap.Drone(id);
+  {
+    std::lock_guard<std::mutex> lock(api_mu_);
+    auto it = api_pending_.find(id);
+    if (it != api_pending_.end()) {
+      const bool same_run = snap.air && snap.air->stamp().run() == it->second.run;
+      if (same_run && (d == nullptr || snap.air->stamp().frame() < it->second.frame)) return it->second.enabled;
+      api_pending_.erase(it);
+    }
+  }
+  return d != nullptr && d->api_control();
 }
 
 msg::DroneState MultirotorClient::State(uint32_t actor) const {
@@ -135,14 +160,9 @@ msg::DroneState MultirotorClient::State(uint32_t actor) const {
   return *s;
 }
 
-msg::DroneCommand MultirotorClient::Make(uint32_t actor, msg::DroneCommandKind kind) const {
-  auto it = api_control_.find(actor);
-  if (it == api_control_.end() || !it->second) {
-    throw ClientError("drone " + std::to_string(actor) +
-                      " is not under API control: call enableApiControl(True) first (as in AirSim)");
-  }
-  return MakeUnchecked(actor, kind);
-}
+// Without API control air_sim applies AirSim's rules (arm and disarm refused, a move steers
+// nothing and runs out its duration or timeout): no client-side check.
+msg::DroneCommand MultirotorClient::Make(uint32_t actor, msg::DroneCommandKind kind) const { return MakeUnchecked(actor, kind); }
 
 msg::DroneCommand MultirotorClient::MakeUnchecked(uint32_t actor, msg::DroneCommandKind kind) const {
   msg::DroneCommand c;
@@ -160,9 +180,16 @@ CommandFuture MultirotorClient::Send(uint32_t actor, msg::DroneCommand cmd) {
   return CommandFuture(&client_, actor, id);
 }
 
+// simple_flight's arm() / disarm() answer false, never raise: without API control air_sim
+// refuses them (its reason is in the log and the drone's failure events).
 bool MultirotorClient::armDisarm(bool arm, const std::string& vehicle) {
   const uint32_t id = Resolve(vehicle);
-  return Send(id, Make(id, arm ? msg::DroneCommandKind::DRONE_ARM : msg::DroneCommandKind::DRONE_DISARM)).join();
+  try {
+    return Send(id, Make(id, arm ? msg::DroneCommandKind::DRONE_ARM : msg::DroneCommandKind::DRONE_DISARM)).join();
+  } catch (const CommandRejected& e) {
+    if (e.reason().find("API has not been given control") == std::string::npos) throw;
+    return false;
+  }
 }
 
 CommandFuture MultirotorClient::takeoffAsync(double timeout_s, const std::string& vehicle) {

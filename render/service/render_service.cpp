@@ -106,7 +106,9 @@ struct RenderService::CameraRecord {
   render::Pose relative;
   std::string role;
   std::string topic;
-  Writer<msg::Image> writer;
+  Writer<msg::Image> writer;             // images within msg::Image's bound ...
+  Writer<msg::LargeImage> large_writer;  // ... or over it (render::kMaxImageBytes): lockstep/sensor/large_image/<id>
+  bool large = false;
   double last_capture = -1e300;
   std::optional<render::Pose> last_pose;
   std::optional<render::Pose> world_pose;  // at the last frame drawn that found its parent
@@ -114,6 +116,7 @@ struct RenderService::CameraRecord {
   render::AutoExposure exposure;  // colour cameras: adapts from image to image (histogram mode)
   double exposure_dt = 0;         // s of simulated time since the camera's previous image
   msg::Image image;  // reused: its buffer keeps its capacity from frame to frame
+  msg::LargeImage large_image;
 };
 
 RenderOptions ParseRenderOptions(int* argc, char** argv) {
@@ -392,8 +395,16 @@ void RenderService::Apply(const msg::Command& c, const msg::FrameStamp& stamp) {
       cam->relative = rec.transform;
       cam->exposure = render::AutoExposure(cam->settings.exposure);
       cam->role = rec.attributes.count("role_name") ? rec.attributes["role_name"] : "";
-      cam->topic = topics::ImageTopicName(s.actor());
-      cam->writer = Writer<msg::Image>(bus_, Topic<msg::Image>{cam->topic.c_str(), QosKind::kImage});
+      cam->large = cam->settings.kind != ImageKind::kDvs &&
+                   static_cast<std::size_t>(cam->settings.camera.width) * cam->settings.camera.height *
+                           render::BytesPerPixel(cam->settings.kind) > render::kMaxImageBytes;
+      if (cam->large) {
+        cam->topic = topics::LargeImageTopicName(s.actor());
+        cam->large_writer = Writer<msg::LargeImage>(bus_, Topic<msg::LargeImage>{cam->topic.c_str(), QosKind::kLargeImage});
+      } else {
+        cam->topic = topics::ImageTopicName(s.actor());
+        cam->writer = Writer<msg::Image>(bus_, Topic<msg::Image>{cam->topic.c_str(), QosKind::kImage});
+      }
       if (cam->settings.kind == ImageKind::kDvs) {
         cam->dvs = std::make_unique<render::DvsSensor>(cam->settings.dvs, cam->settings.camera.width, cam->settings.camera.height,
                                                        world_.seed() ^ s.actor());
@@ -666,7 +677,23 @@ void RenderService::Publish(CameraRecord& cam, const render::Camera& view, const
       for (std::size_t i = 2; i < img.data().size(); i += 4) img.data()[i] = render::ToPaperClass(img.data()[i]);
     }
   }
-  cam.writer.Write(img);
+  if (!cam.large) {
+    cam.writer.Write(img);
+    return;
+  }
+  // Over Image's bound: the same fields as a LargeImage; the pixels move over and back (no copy).
+  msg::LargeImage& big = cam.large_image;
+  big.sensor(img.sensor());
+  big.stamp(img.stamp());
+  big.sensor_pose(img.sensor_pose());
+  big.width(img.width());
+  big.height(img.height());
+  big.step(img.step());
+  big.encoding(img.encoding());
+  big.fov(img.fov());
+  big.data().swap(img.data());
+  cam.large_writer.Write(big);
+  big.data().swap(img.data());
 }
 
 void RenderService::Save(const CameraRecord& cam, const render::CameraImages& images, uint64_t frame) {

@@ -19,7 +19,7 @@ AttributeSpec S(const std::string& id, const std::string& def, std::vector<std::
 }
 
 std::vector<AttributeSpec> Basic() {
-  return {S("role_name", "", {}), I("image_size_x", 800, 1, 3840), I("image_size_y", 600, 1, 2160), F("fov", 90, 1, 170),
+  return {S("role_name", "", {}), I("image_size_x", 800, 1, 7680), I("image_size_y", 600, 1, 7680), F("fov", 90, 1, 170),
           F("sensor_tick", 0, 0, 3600), F("lens_circle_falloff", 5, 0, 10), F("lens_circle_multiplier", 0, 0, 10),
           F("lens_k", -1, -100, 100), F("lens_kcube", 0, -100, 100), F("lens_x_size", 0.08, 0, 1), F("lens_y_size", 0.08, 0, 1)};
 }
@@ -233,11 +233,16 @@ CameraSettings ParseCamera(const std::string& blueprint, const std::map<std::str
     s.dvs.use_log = boolean("use_log");
     s.dvs.log_eps = number("log_eps");
   }
-  const int bpp = s.kind == ImageKind::kDvs ? 4 : BytesPerPixel(s.kind);
-  if (static_cast<std::size_t>(s.camera.width) * s.camera.height * bpp > kMaxImageBytes) {
+  // DVS events travel in one Image (its bound); other images over the bound as a LargeImage, up to 8K.
+  const std::size_t pixels = static_cast<std::size_t>(s.camera.width) * s.camera.height;
+  if (s.kind == ImageKind::kDvs && pixels * 4 > kMaxImageBytes) {
     throw std::invalid_argument(blueprint + ": image_size_x x image_size_y = " + std::to_string(s.camera.width) + "x" +
                                 std::to_string(s.camera.height) + " gives more than " + std::to_string(kMaxImageBytes) +
-                                " bytes per image (1920x1080 BGRA at most)");
+                                " bytes per image (1920x1080 at most for a DVS camera)");
+  }
+  if (pixels > kMaxCameraPixels) {
+    throw std::invalid_argument(blueprint + ": image_size_x x image_size_y = " + std::to_string(s.camera.width) + "x" +
+                                std::to_string(s.camera.height) + " is more than 7680x4320 (8K) pixels");
   }
   s.camera.outputs = OutputsFor(s.kind);
   return s;

@@ -12,6 +12,7 @@ const char* QosFamilyName(QosKind kind) {
     case QosKind::kEvent: return "event";
     case QosKind::kSensor: return "sensor";
     case QosKind::kImage: return "image";
+    case QosKind::kLargeImage: return "large_image";
   }
   return "unknown";
 }
@@ -26,13 +27,15 @@ int QosHistoryDepth(QosKind kind) {
     case QosKind::kState: return 4;
     case QosKind::kEvent: return 64;
     case QosKind::kSensor:
-    case QosKind::kImage: return 2;
+    case QosKind::kImage:
+    case QosKind::kLargeImage: return 2;
   }
   return 1;
 }
 
 bool QosTransientLocal(QosKind kind) {
-  return kind == QosKind::kClock || kind == QosKind::kMembership || kind == QosKind::kState || kind == QosKind::kImage;
+  return kind == QosKind::kClock || kind == QosKind::kMembership || kind == QosKind::kState || kind == QosKind::kImage ||
+         kind == QosKind::kLargeImage;
 }
 
 std::string DefaultQosFile() { return LOCKSTEP_DEFAULT_QOS_FILE; }

@@ -55,6 +55,37 @@ def test_the_method_table_of_the_docs_is_airsims():
     assert all(v[0] in ('yes', 'partly', 'no') for v in rows.values())
 
 
+def _raises_unsupported_always(f):
+    """The method's body (after its docstring) is one _unsupported(...) call: it can only raise."""
+    import ast
+    import textwrap
+    tree = ast.parse(textwrap.dedent(inspect.getsource(f)))
+    body = tree.body[0].body
+    if body and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant):
+        body = body[1:]
+    return (len(body) == 1 and isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Call)
+            and getattr(body[0].value.func, 'id', '') == '_unsupported')
+
+
+def test_the_table_says_no_exactly_for_the_calls_that_only_raise():
+    """The table is the code's: a call whose body only raises LockstepUnsupported is "no", and
+    a "yes" or "partly" call does something (AirSim's method names from airsim_reference)."""
+    rows = doc_table()
+    wrong = []
+    for name, (state, cls_name) in rows.items():
+        f = getattr(getattr(airsim, cls_name), name)
+        if _raises_unsupported_always(f) != (state == 'no'):
+            wrong.append('%s: table says %s' % (name, state))
+    assert not wrong
+
+
+def test_settings_string_without_a_file_is_airsims_default(tmp_path):
+    import json
+    s = settings_mod.load(str(tmp_path / 'none.json'))
+    assert json.loads(s.text) == {'SeeDocsAt': 'https://github.com/Microsoft/AirSim/blob/main/docs/settings.md',
+                                  'SettingsVersion': 1.2}
+
+
 def _dummy_args(f):
     """Arguments for a call that must raise before it needs any of them."""
     sig = inspect.signature(f)

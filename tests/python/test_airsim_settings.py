@@ -1,10 +1,13 @@
 """AirSim's settings.json and AirSim's rules against a running simulation: the vehicles at
 their settings poses from the player start, a camera with its resolution and mount, LiDARs
 with their settings and data frame, AirSim's image types on a known scene, reset() to the
-settings poses, armDisarm without API control."""
+settings poses, armDisarm without API control, API control across processes, a camera over
+the Image bound."""
 import json
 import math
 import os
+import subprocess
+import sys
 
 import numpy as np
 import pytest
@@ -17,7 +20,10 @@ SETTINGS = {
         'Drone1': {'VehicleType': 'SimpleFlight', 'X': 0, 'Y': 0, 'Z': 0,
                    'Cameras': {'probe': {'CaptureSettings': [{'ImageType': t, 'Width': 96, 'Height': 64,
                                                               'FOV_Degrees': 70} for t in (0, 1, 2, 3)],
-                                         'X': 0.4, 'Y': 0.0, 'Z': 0.05, 'Roll': 0, 'Pitch': -90, 'Yaw': 0}},
+                                         'X': 0.4, 'Y': 0.0, 'Z': 0.05, 'Roll': 0, 'Pitch': -90, 'Yaw': 0},
+                               # 2000 x 1100 BGRA is more than an Image message holds (1920 x 1080).
+                               'wide': {'CaptureSettings': [{'ImageType': 0, 'Width': 2000, 'Height': 1100}],
+                                        'X': 0.4, 'Y': 0.0, 'Z': 0.05, 'Pitch': -90}},
                    'Sensors': {'LocalLidar': {'SensorType': 6, 'Enabled': True, 'NumberOfChannels': 1, 'Range': 30,
                                               'RotationsPerSecond': 20, 'PointsPerSecond': 4000,
                                               'VerticalFOVUpper': -90, 'VerticalFOVLower': -90,
@@ -202,6 +208,54 @@ def test_a_move_that_cannot_complete_times_out_and_says_so(client, caplog, monke
     finally:
         logger.removeHandler(caplog.handler)
     assert "moveToPositionAsync on vehicle 'Drone2' still running" in caplog.text and 'not getting anywhere' in caplog.text
+
+
+def _in_another_process(code):
+    """Runs `code` with `c = airsim.MultirotorClient()` in a new Python process on the same
+    simulation; its printed words."""
+    prelude = 'import airsim\nc = airsim.MultirotorClient()\n'
+    r = subprocess.run([sys.executable, '-c', prelude + code], env=dict(os.environ), capture_output=True, text=True,
+                       timeout=180)
+    assert r.returncode == 0, r.stdout + r.stderr
+    return r.stdout.split()
+
+
+def test_api_control_is_the_vehicles_across_processes(client):
+    """AirSim's API control belongs to the vehicle: one process takes it, another sees it; without
+    it, as simple_flight, arming is refused and a move steers nothing but waits out its duration
+    (True) or its timeout (False)."""
+    client.enableApiControl(False, 'Drone2')
+    client._client.tick()
+    assert _in_another_process("print(c.isApiControlEnabled('Drone2')); c.enableApiControl(True, 'Drone2'); "
+                               "print(c.isApiControlEnabled('Drone2'))") == ['False', 'True']
+    client._client.tick()
+    assert client.isApiControlEnabled('Drone2') is True   # taken by the other process
+    client.enableApiControl(False, 'Drone2')
+    client._client.tick()
+    out = _in_another_process(
+        "p0 = c.simGetVehiclePose('Drone2').position\n"
+        "print(c.isApiControlEnabled('Drone2'), c.armDisarm(True, 'Drone2'))\n"
+        "print(c.moveByVelocityAsync(3, 0, -2, 1, vehicle_name='Drone2').join())\n"
+        "print(c.moveToPositionAsync(10, 0, -5, 3, timeout_sec=1, vehicle_name='Drone2').join())\n"
+        "print('%.4f' % (c.simGetVehiclePose('Drone2').position - p0).get_length())\n")
+    assert out[:4] == ['False', 'False', 'True', 'False']
+    assert float(out[4]) < 0.02   # m: neither move steered the drone
+
+
+def test_a_camera_over_the_image_bound_arrives_whole(client):
+    """A settings camera of 2000 x 1100 (more than msg::Image's 1920 x 1080 BGRA) comes as a
+    LargeImage on its own topic between the render process and this one."""
+    if not has_service('render'):
+        pytest.skip('needs render')
+    import airsim
+    try:
+        r = client.simGetImages([airsim.ImageRequest('wide', airsim.ImageType.Scene, False, False)], 'Drone1')[0]
+        assert (r.width, r.height) == (2000, 1100)
+        img = np.frombuffer(r.image_data_uint8, np.uint8)
+        assert img.size == 2000 * 1100 * 3
+        assert float(img.reshape(1100, 2000, 3).std()) > 1.0   # a rendered scene, not an empty buffer
+    finally:
+        client._s.sensors.drop(lambda key: key[2] == 'wide')   # 2.2 Mpx a frame: not for the rest of the module
 
 
 def test_car_client_drives_a_ground_sim_car(client):

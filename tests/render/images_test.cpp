@@ -31,7 +31,10 @@ TEST(CameraConfig, DefaultsAreCarlasAndBadValuesNameTheAttribute) {
   };
   EXPECT_NE(message("sensor.camera.rgb", {{"fov", "abc"}}).find("fov"), std::string::npos);
   EXPECT_NE(message("sensor.camera.rgb", {{"image_size_x", "0"}}).find("image_size_x"), std::string::npos);
-  EXPECT_NE(message("sensor.camera.rgb", {{"image_size_x", "3840"}, {"image_size_y", "2160"}}).find("1920x1080"), std::string::npos);
+  // Over Image's bound goes as a LargeImage, up to 8K; a DVS camera's events stay within the bound.
+  EXPECT_EQ(message("sensor.camera.rgb", {{"image_size_x", "3840"}, {"image_size_y", "2160"}}), "");
+  EXPECT_NE(message("sensor.camera.rgb", {{"image_size_x", "7680"}, {"image_size_y", "7680"}}).find("7680x4320"), std::string::npos);
+  EXPECT_NE(message("sensor.camera.dvs", {{"image_size_x", "3840"}, {"image_size_y", "2160"}}).find("1920x1080"), std::string::npos);
   EXPECT_NE(message("sensor.camera.airsim", {{"image_type", "Thermal"}}).find("image_type"), std::string::npos);
   EXPECT_NE(message("sensor.camera.rgb", {{"exposure_mode", "auto"}}).find("exposure_mode"), std::string::npos);
   EXPECT_NE(message("sensor.camera.lidar", {}).find("not a camera"), std::string::npos);

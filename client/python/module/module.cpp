@@ -712,8 +712,8 @@ PYBIND11_MODULE(_lockstep, m) {
              return mc.addVehicle(name, bp, p);
            })
       .def("home", [](const MC& mc, const std::string& v) { return Vec(mc.homeEnu(v)); })
-      .def("enable_api_control", &MC::enableApiControl)
-      .def("is_api_control_enabled", &MC::isApiControlEnabled)
+      .def("enable_api_control", &MC::enableApiControl, py::call_guard<python::ReleaseGil>())
+      .def("is_api_control_enabled", &MC::isApiControlEnabled, py::call_guard<python::ReleaseGil>())
       .def("arm_disarm", &MC::armDisarm, py::call_guard<python::ReleaseGil>())
       .def("takeoff", &MC::takeoffAsync, py::call_guard<python::ReleaseGil>())
       .def("land", &MC::landAsync, py::call_guard<python::ReleaseGil>())

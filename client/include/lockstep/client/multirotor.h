@@ -7,6 +7,7 @@
 // DroneState.command_status.
 #include <cstdint>
 #include <map>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -169,9 +170,15 @@ class MultirotorClient {
   msg::DroneState State(uint32_t actor) const;
   CommandFuture Send(uint32_t actor, msg::DroneCommand cmd);
   msg::DroneCommand Make(uint32_t actor, msg::DroneCommandKind kind) const;
-  msg::DroneCommand MakeUnchecked(uint32_t actor, msg::DroneCommandKind kind) const;  // no API-control check
+  msg::DroneCommand MakeUnchecked(uint32_t actor, msg::DroneCommandKind kind) const;
   Client& client_;
-  std::map<uint32_t, bool> api_control_;
+  struct PendingApiControl {
+    bool enabled = false;
+    uint32_t run = 0;
+    uint64_t frame = 0;  // the tick that carries the request
+  };
+  mutable std::mutex api_mu_;
+  mutable std::map<uint32_t, PendingApiControl> api_pending_;  // enableApiControl requests not yet in the air state
 };
 
 }  // namespace lockstep::client

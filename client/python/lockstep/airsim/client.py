@@ -5,9 +5,10 @@ FRD; the world NED of simAddVehicle, settings.json and the plotting calls is the
 start's (docs/compatibility.md). *Async calls return a future whose join() waits until
 air_sim reports the command finished (in synchronous mode it ticks the world).
 
-One state per process (per DDS session): API control, camera poses, the settings.json
-vehicles and the sensors attached to them belong to the vehicle, whichever client of the
-process asks, as they belong to the server in AirSim."""
+API control is the vehicle's (air_sim's drone state), whichever client or process takes it,
+as AirSim's server holds it. One state per process (per DDS session): camera poses, the
+settings.json vehicles and the sensors attached to them belong to the vehicle, whichever
+client of the process asks."""
 import logging
 import math
 import os
@@ -748,9 +749,8 @@ class VehicleClient:
             raise lockstep.ClientError('%s: image_type %r is not one of AirSim\'s (0..9)' % (call, r.image_type))
         a, cam, mount, fov_over, cs = self._camera(vehicle_name, r.camera_name, call)
         w, h, fov = self._capture(cs, it, fov_over)
-        if w * h > 1920 * 1080:
-            _unsupported('%s(camera %r, %dx%d)' % (call, cam, w, h), "an image's pixels are one DDS Image message, "
-                         'bounded at 1920x1080 BGRA (idl/lockstep/sensor.idl)')
+        if w * h > 7680 * 4320:
+            _unsupported('%s(camera %r, %dx%d)' % (call, cam, w, h), 'cameras are at most 7680x4320 (8K) pixels')
         attrs = {'image_size_x': str(w), 'image_size_y': str(h), 'fov': repr(float(fov)),
                  'role_name': 'airsim_%s_%d' % (cam, it)}
         if it in _IMAGE_TYPE_NAMES:
@@ -1581,9 +1581,6 @@ class MultirotorClient(VehicleClient):
         if not _dur(duration):
             return _DoneFuture()
         a = self._s.actor(vehicle_name)
-        if not self._mc.is_api_control_enabled(vehicle_name):
-            raise lockstep.ClientError("vehicle '%s' is not under API control: call enableApiControl(True) first"
-                                       % (vehicle_name or 'default'))
         end = self._s.sim_time() + min(float(duration), 1e5)
         self._s.manual[a] = (vx_max, vy_max, z_min, end, drivetrain, yaw_mode)
         rc = self._s.rc.get(a)
@@ -1686,6 +1683,11 @@ class MultirotorClient(VehicleClient):
         for name, values in (('i', ki), ('d', kd)):
             if name not in terms and any(values):
                 _unsupported('%s with k%s' % (call, name), "air_sim's %s loop has no %s term" % (
+        if not self._mc.is_api_control_enabled(vehicle_name):
+            # simple_flight refuses the goals without API control: the call waits out its duration.
+            log.warning("airsim: moveByManualAsync on vehicle '%s' without API control: it does not steer the vehicle",
+                        vehicle_name or 'default')
+            return _TimedFuture(self._s, end)
                     loop.replace('_', ' '), {'i': 'integral', 'd': 'derivative'}[name]))
         self._mc.set_gains(loop, list(zip(kp, ki, kd)), vehicle_name)
 

@@ -337,7 +337,8 @@ def parse(text, path='settings.json'):
 
 
 def load(path=None):
-    """The settings at `path` (default settings_path()); AirSim's defaults when there is no file."""
+    """The settings at `path` (default settings_path()); AirSim's defaults when there is no file
+    (its text AirSim's default file's; the file is not written)."""
     path = path or settings_path()
     if not os.path.exists(path):
         s = Settings()
@@ -346,3 +347,9 @@ def load(path=None):
     with open(path, encoding='utf-8-sig') as f:
         text = f.read()
     return parse(text, path)
+# What AirSim writes to a missing settings.json at start (and getSettingsString then returns).
+DEFAULT_TEXT = ('{\n  "SeeDocsAt": "https://github.com/Microsoft/AirSim/blob/main/docs/settings.md",\n'
+                '  "SettingsVersion": 1.2\n}')
+
+
+        s.text = DEFAULT_TEXT

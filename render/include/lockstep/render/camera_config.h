@@ -40,8 +40,11 @@ struct CameraSettings {
   ExposureSettings exposure;  // colour cameras; camera.exposure is its first image's multiplier
 };
 
-// Largest image payload (bytes) a frame may carry: 1920 x 1080 x 4.
+// Largest image payload (bytes) one msg::Image carries: 1920 x 1080 x 4. A larger image goes
+// as a msg::LargeImage (unbounded) on the camera's large_image topic.
 inline constexpr std::size_t kMaxImageBytes = 8294400;
+// Largest camera: 8K, 7680 x 4320 pixels (AirSim's settings cameras go up to it).
+inline constexpr std::size_t kMaxCameraPixels = std::size_t{7680} * 4320;
 
 // Attributes not given take their defaults; unknown ones are ignored (role_name, ...).
 // Throws std::invalid_argument naming the attribute and the value.

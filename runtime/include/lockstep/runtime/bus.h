@@ -21,6 +21,7 @@ enum class QosKind {
   kEvent,       // RELIABLE, KEEP_LAST 64, VOLATILE
   kSensor,      // RELIABLE, KEEP_LAST 2, VOLATILE: point clouds, IMU, ...
   kImage,       // RELIABLE, KEEP_LAST 2, TRANSIENT_LOCAL, preallocated, data-sharing: camera images
+  kLargeImage,  // RELIABLE, KEEP_LAST 2, TRANSIENT_LOCAL, no data-sharing: images over Image's bound
 };
 const char* QosFamilyName(QosKind kind);
 int QosHistoryDepth(QosKind kind);

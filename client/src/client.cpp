@@ -788,6 +788,7 @@ struct Client::Impl {
       case SensorType::kLaneInvasion: MakeSensorReader(type, topics::kLaneInvasion); break;
       case SensorType::kObstacle: MakeSensorReader(type, topics::kObstacle); break;
       case SensorType::kDistance: MakeSensorReader(type, topics::kDistance); break;
+      case SensorType::kV2X: MakeSensorReader(type, topics::kV2X); break;
     }
   }
 
@@ -1179,6 +1180,12 @@ Snapshot Client::snapshot() const {
   if (auto g = pick(impl_->ground)) s.ground = *g;
   if (auto a = pick(impl_->air)) s.air = *a;
   return s;
+}
+
+std::optional<msg::MapData> Client::map_data() {
+  std::unique_lock<std::mutex> lock(impl_->mu);
+  impl_->WaitUntil(lock, Deadline(impl_->options.timeout_s), [&] { return impl_->map_data.has_value(); });
+  return impl_->map_data;
 }
 
 std::shared_ptr<const map::Map> Client::map() {

@@ -23,6 +23,7 @@ bool SensorTypeOf(const std::string& blueprint, SensorType* type) {
       {"sensor.other.lane_invasion", SensorType::kLaneInvasion},
       {"sensor.other.obstacle", SensorType::kObstacle},
       {"sensor.other.distance", SensorType::kDistance},
+      {"sensor.other.v2x", SensorType::kV2X},  // and sensor.other.v2x_custom
   };
   for (const auto& e : kTable) {
     if (StartsWith(blueprint, e.prefix)) {
@@ -46,12 +47,14 @@ const char* SensorTypeName(SensorType type) {
     case SensorType::kLaneInvasion: return "lane_invasion";
     case SensorType::kObstacle: return "obstacle";
     case SensorType::kDistance: return "distance";
+    case SensorType::kV2X: return "v2x";
   }
   return "?";
 }
 
 bool IsPerFrame(SensorType type) {
-  return type != SensorType::kCollision && type != SensorType::kLaneInvasion && type != SensorType::kObstacle;
+  return type != SensorType::kCollision && type != SensorType::kLaneInvasion && type != SensorType::kObstacle &&
+         type != SensorType::kV2X;
 }
 
 const uint8_t* SensorSample::Bytes() const {

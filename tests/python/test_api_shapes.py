@@ -129,8 +129,8 @@ def test_calls_lockstep_lacks_raise_naming_themselves_not_attribute_error():
     whose message names it (never AttributeError, never a silent no-op)."""
     calls = {carla.Vehicle: ['close_door', 'use_carsim_road', 'enable_chrono_physics', 'show_debug_telemetry',
                              'open_door', 'enable_carsim', 'get_ackermann_controller_settings'],
-             carla.World: ['get_names_of_all_objects', 'enable_environment_objects', 'cast_ray', 'get_lightmanager'],
-             carla.Sensor: ['disable_for_ros', 'enable_for_ros', 'send'],
+             carla.World: ['get_names_of_all_objects', 'enable_environment_objects', 'get_lightmanager'],
+             carla.Sensor: ['disable_for_ros', 'enable_for_ros', 'is_enabled_for_ros'],
              carla.Map: ['save_to_disk', 'cook_in_memory_map'],
              carla.TrafficManager: ['get_next_action', 'get_all_actions'],
              carla.Client: ['request_file', 'show_recorder_collisions', 'stop_replayer', 'start_recorder'],

@@ -332,6 +332,13 @@ msg::CommandBody CommandFromDict(const py::dict& d) {
     for (const auto& item : f.Need<py::list>("shapes")) x.shapes().push_back(DebugShapeFromDict(item.cast<py::dict>()));
     if (x.shapes().size() > 4096) throw py::value_error("command 'debug_draw': at most 4096 shapes");
     b.debug_draw(x);
+  } else if (type == "v2x_send") {
+    msg::V2XSend x;
+    x.sensor(f.Need<uint32_t>("sensor"));
+    const std::string data = f.Need<std::string>("data");
+    if (data.size() > 1024) throw py::value_error("command 'v2x_send': a V2X message takes at most 1024 bytes, got " + std::to_string(data.size()));
+    x.data(data);
+    b.v2x_send(x);
   } else if (type == "drone") {
     msg::DroneCommand x;
     x.actor(f.Need<uint32_t>("actor"));
@@ -349,7 +356,7 @@ msg::CommandBody CommandFromDict(const py::dict& d) {
   } else {
     throw py::value_error("unknown command type '" + type +
                           "' (spawn, destroy, set_transform, vehicle_control, walker_control, traffic_light, "
-                          "traffic_manager, drone, ackermann, actor_physics, vehicle_physics, walker_ai, pedestrians, debug_draw)");
+                          "traffic_manager, drone, ackermann, actor_physics, vehicle_physics, walker_ai, pedestrians, debug_draw, v2x_send)");
   }
   f.CheckAllUsed();
   return b;

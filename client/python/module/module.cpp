@@ -13,6 +13,7 @@
 #include "embedded_coordinator.h"
 #include "gil.h"
 #include "map_queries.h"
+#include "ray_queries.h"
 #include "lockstep/client/client.h"
 #include "lockstep/client/multirotor.h"
 #include "lockstep/map/map.h"
@@ -321,6 +322,16 @@ py::dict SampleFields(const SensorSample& s) {
       d["max_distance"] = m.max_distance();
       break;
     }
+    case SensorType::kV2X: {
+      // [(sending sensor id, received power dBm, payload bytes)]: docs/sensors.md's packed layout.
+      py::list got;
+      for (const auto& r : s.As<msg::V2XData>().messages()) {
+        const auto& p = r.payload();
+        got.append(py::make_tuple(r.sender(), r.power_dbm(), py::bytes(reinterpret_cast<const char*>(p.data()), p.size())));
+      }
+      d["messages"] = got;
+      break;
+    }
     case SensorType::kObstacle: {
       const auto& m = s.As<msg::ObstacleDetection>();
       d["actor"] = m.actor();
@@ -406,6 +417,7 @@ PYBIND11_MODULE(_lockstep, m) {
 
   py::class_<map::Map, std::shared_ptr<map::Map>> map_class(m, "Map");
   python::AddMapQueries(map_class);
+  python::AddRayQueries(m);
   map_class.def_property_readonly("name", &map::Map::Name)
       .def(
           "waypoint",

@@ -214,6 +214,9 @@ class Client {
   Snapshot snapshot() const;  // the latest frame's state
   // The map of the current run, built from lockstep/map (waits up to timeout_s).
   std::shared_ptr<const map::Map> map();
+  // The coordinator's MapData of the current map (OpenDRIVE and scene text), waiting up to
+  // timeout_s; nullopt if none arrived.
+  std::optional<msg::MapData> map_data();
 
   // --- sensors ---
   // Delivers every sample of `sensor` to `callback` once, in frame order, on the

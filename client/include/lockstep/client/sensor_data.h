@@ -22,6 +22,7 @@ enum class SensorType {
   kLaneInvasion,
   kObstacle,
   kDistance,     // lockstep/sensor/distance (AirSim's distance sensor)
+  kV2X,          // lockstep/sensor/v2x (CARLA's sensor.other.v2x, v2x_custom): steps with messages only
 };
 
 // Which topic a sensor blueprint publishes on; false if `blueprint` is not a sensor we know.

@@ -744,6 +744,12 @@ class Sensor(Actor):
     def is_listening(self):
         return self._world._client.is_listening(self.id)
 
+    def send(self, message):
+        """CARLA 0.9.16's sensor.other.v2x_custom send(): the text goes out from this sensor at
+        the next step (the last text sent before it), to the other v2x_custom sensors in range.
+        Another actor raises CommandRejected (CARLA: an actor type mismatch)."""
+        self._world._client.submit({'type': 'v2x_send', 'sensor': self.id, 'data': str(message)})
+
     # --- G-buffers: companion cameras of the render service's passes (gbuffer.py) ---
     def listen_to_gbuffer(self, gbuffer_id, callback):
         from .gbuffer import GBuffers

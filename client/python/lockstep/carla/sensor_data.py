@@ -20,7 +20,8 @@ from .geometry import Color, Location, Vector3D, from_enu_vector, from_wire_pose
 __all__ = ['ColorConverter', 'SensorData', 'Image', 'OpticalFlowImage', 'OpticalFlowPixel', 'DVSEvent', 'DVSEventArray',
            'LidarMeasurement', 'LidarDetection', 'SemanticLidarMeasurement', 'SemanticLidarDetection',
            'RadarMeasurement', 'RadarDetection', 'IMUMeasurement', 'GnssMeasurement', 'CollisionEvent',
-           'LaneInvasionEvent', 'ObstacleDetectionEvent', 'GBufferTextureID', 'make_sensor_data']
+           'LaneInvasionEvent', 'ObstacleDetectionEvent', 'GBufferTextureID', 'CAMEvent', 'CAMMessage', 'CustomV2XEvent',
+           'CustomV2XData', 'make_sensor_data']
 
 
 class ColorConverter:
@@ -714,7 +715,168 @@ class ObstacleDetectionEvent(SensorData):
                                                                                   self.other_actor)
 
 
-_CLASSES = {'imu': IMUMeasurement, 'gnss': GnssMeasurement, 'radar': RadarMeasurement,
+# ---- V2X (CARLA 0.9.16: LibCarla sensor/data/V2XEvent.h, PythonAPI libcarla/V2XData.cpp) ----
+# The payload of each message is docs/sensors.md's packed layout: little-endian int32 fields,
+# CARLA's ItsPduHeader first; get() builds CARLA's dict from it, key for key.
+
+_CAM_FIELDS = ('protocol_version', 'message_id', 'station_id', 'generation_delta_time', 'station_type', 'latitude',
+               'longitude', 'semi_major_confidence', 'semi_minor_confidence', 'semi_major_orientation', 'altitude_value',
+               'altitude_confidence', 'high_frequency_present', 'heading_value', 'heading_confidence', 'speed_value',
+               'speed_confidence', 'drive_direction', 'vehicle_length_value', 'vehicle_length_confidence', 'vehicle_width',
+               'longitudinal_acceleration_value', 'longitudinal_acceleration_confidence', 'curvature_value',
+               'curvature_confidence', 'curvature_calculation_mode', 'yaw_rate_value', 'yaw_rate_confidence',
+               'optional_present', 'lateral_acceleration_value', 'lateral_acceleration_confidence',
+               'vertical_acceleration_value', 'vertical_acceleration_confidence', 'low_frequency_present', 'vehicle_role',
+               'exterior_lights', 'path_history_points')
+_MESSAGE_IDS = {0: 'CUSTOM', 1: 'DENM', 2: 'CAM', 3: 'POI', 4: 'SPAT', 5: 'MAP', 6: 'IVI', 7: 'EV_RSR'}
+_STATION_TYPES = {0: 'Uunknown', 1: 'Pedestrian', 2: 'Cyclist', 3: 'Moped', 4: 'Motorcycle', 5: 'Passenger Car', 6: 'Bus',
+                  7: 'Light Truck', 8: 'HeavyTruck', 9: 'Trailer', 10: 'Special Vehicle', 11: 'Tram', 15: 'Road Side Unit'}
+_SEMI_AXIS = {1: 'Semi Axis Length One Centimeter', 4094: 'Semi Axis Length Out Of Range'}
+_ORIENTATION = {0: 'Heading wgs84 North', 900: 'Heading wgs84 East', 1800: 'Heading wgs84 South', 2700: 'Heading wgs84 West'}
+_HEADING_CONF = {1: 'Equal or With in Zero Point One Degree', 10: 'Equal or With in One Degree', 126: 'Out of Range'}
+_SPEED_CONF = {1: 'Equal or With in One Centimeter per Sec', 100: 'Equal or With in One Meter per Sec', 126: 'Out of Range'}
+_LENGTH_CONF = {0: 'No Trailer Present', 1: 'Trailer Present With Known Length', 2: 'Trailer Present With Unknown Length',
+                3: 'Trailer Presence Is Unknown'}
+_ACCEL_CONF = {1: 'Point One Meter Per Sec Squared', 101: 'Out Of Range'}
+_CURVATURE_CONF = {0: 'One Per Meter 0_00002', 1: 'One Per Meter 0_0001', 2: 'One Per Meter 0_0005', 3: 'One Per Meter 0_002',
+                   4: 'One Per Meter 0_01', 5: 'One Per Meter 0_1', 6: 'Out Of Range'}
+_YAW_CONF = {0: 'degSec 000_01', 1: 'degSec 000_05', 2: 'degSec 000_10', 3: 'degSec 001_00', 4: 'degSec 005_00',
+             5: 'degSec 010_00', 6: 'degSec 100_00', 7: 'Out Of Range'}
+_ROLES = {0: 'Default', 1: 'Public Transport', 2: 'Special Transport', 3: 'Dangerous Goods', 4: 'Road Work', 5: 'Rescue',
+          6: 'Emergency', 7: 'Safety Car', 8: 'Agriculture', 9: 'Commercial', 10: 'Military', 11: 'Road Operator',
+          12: 'Taxi', 13: 'Reserved 1', 14: 'Reserved 2', 15: 'Reserved 3'}
+
+
+def _int32s(payload, count):
+    n = min(count, len(payload) // 4)
+    values = list(struct.unpack_from('<%di' % n, payload)) if n else []
+    return values + [0] * (count - n)
+
+
+def _header(protocol_version, message_id, station_id):
+    return {'Protocol Version': protocol_version, 'Message ID': _MESSAGE_IDS.get(message_id, 'Not Found'),
+            'Station ID': station_id}
+
+
+def _cam_dict(c):
+    ref = {'Latitude': c['latitude'], 'Longitude': c['longitude'],
+           'Position Confidence Eliipse': {  # sic, CARLA's key
+               'Semi Major Confidence': _SEMI_AXIS.get(c['semi_major_confidence'], 'Semi Axis Length Unavailable'),
+               'Semi Minor Confidence': _SEMI_AXIS.get(c['semi_minor_confidence'], 'Semi Axis Length Unavailable'),
+               'Semi Major Orientation': _ORIENTATION.get(c['semi_major_orientation'], 'Heading Unavailable')}}
+    basic = {'Station Type': _STATION_TYPES.get(c['station_type'], 'Unknown'), 'Reference Position': ref}
+    present = c['high_frequency_present']
+    if present == 1:
+        opt = c['optional_present']
+        vc = lambda value, table, conf: {'Value': value, 'Confidence': table.get(conf, 'Unavailable')}  # noqa: E731
+        bvc = {'Heading': vc(c['heading_value'], _HEADING_CONF, c['heading_confidence']),
+               'Speed': vc(c['speed_value'], _SPEED_CONF, c['speed_confidence']),
+               'Drive Direction': c['drive_direction'],
+               'Vehicle Length': vc(c['vehicle_length_value'], _LENGTH_CONF, c['vehicle_length_confidence']),
+               'Vehicle Width': c['vehicle_width'],
+               'Longitudinal Acceleration': vc(c['longitudinal_acceleration_value'], _ACCEL_CONF,
+                                               c['longitudinal_acceleration_confidence']),
+               'Curvature': vc(c['curvature_value'], _CURVATURE_CONF, c['curvature_confidence']),
+               'Curvature Calculation Mode': c['curvature_calculation_mode'],
+               'Yaw Rate': vc(c['yaw_rate_value'], _YAW_CONF, c['yaw_rate_confidence']),
+               'Acceleration Control': None, 'Lane Position': None, 'Steering Wheel Angle': None,
+               'Lateral Acceleration': vc(c['lateral_acceleration_value'], _ACCEL_CONF,
+                                          c['lateral_acceleration_confidence']) if opt & 8 else None,
+               'Vertical Acceleration': vc(c['vertical_acceleration_value'], _ACCEL_CONF,
+                                           c['vertical_acceleration_confidence']) if opt & 16 else None,
+               'Performance class': None, 'Cen DSRC Tolling Zone': None}
+        hfc = {'High Frequency Container Present': 'Basic Vehicle Container High Frequency',
+               'Basic Vehicle Container High Frequency': bvc}
+    elif present == 2:
+        hfc = {'High Frequency Container Present': 'RSU Container High Frequency',
+               'RSU Container High Frequency': {'Protected Communication Zone': []}}
+    else:
+        hfc = {'High Frequency Container Present': 'No container present'}
+    if c['low_frequency_present'] == 1:
+        lfc = {'Low Frequency Container Present': 'Basic Vehicle Container Low Frequency',
+               'Basic Vehicle Low Frequency': {'Vehicle Role': _ROLES.get(c['vehicle_role'], 'Default'),
+                                               'Exterior Light': c['exterior_lights'], 'Path History': None}}
+    else:
+        lfc = {'Low Frequency Container Present': 'No Container Present'}
+    return {'Header': _header(c['protocol_version'], c['message_id'], c['station_id']),
+            'Message': {'Generation Delta Time': c['generation_delta_time'],
+                        'CAM Parameters': {'Basic Container': basic, 'High Frequency Container': hfc,
+                                           'Low Frequency Container': lfc}}}
+
+
+class CAMMessage:
+    """carla.CAMMessage: one cooperative awareness message as a sensor.other.v2x received it."""
+
+    def __init__(self, power=0.0, payload=b''):
+        self.power = float(power)
+        self._fields = dict(zip(_CAM_FIELDS, _int32s(payload, len(_CAM_FIELDS))))
+
+    def get(self):
+        """CARLA's dict of the message (Header, Message: Generation Delta Time, CAM Parameters)."""
+        return _cam_dict(self._fields)
+
+    def __str__(self):
+        return 'CAMData(power=%f, stationId=%d, messageId=%d)' % (self.power, self._fields['station_id'],
+                                                                   self._fields['message_id'])
+
+
+class CustomV2XData:
+    """carla.CustomV2XData: one message a sensor.other.v2x_custom received."""
+
+    def __init__(self, power=0.0, payload=b''):
+        self.power = float(power)
+        self._header = _int32s(payload[:12], 3)
+        self._text = bytes(payload[12:]).decode('utf-8', errors='replace')
+
+    def get(self):
+        """CARLA's dict: Header (Protocol Version, Message ID, Station ID) and the Message text."""
+        return {'Header': _header(*self._header), 'Message': self._text}
+
+    def __str__(self):
+        return 'CustomV2XData(power=%f, stationId=%d, messageId=%d)' % (self.power, self._header[2], self._header[1])
+
+
+class _V2XEvent(SensorData):
+    _message = None
+
+    def __init__(self, sample, world):
+        super().__init__(sample, world)
+        self._messages = [self._message(power, payload) for _, power, payload in self._fields['messages']]
+
+    def get_message_count(self):
+        return len(self._messages)
+
+    def __len__(self):
+        return len(self._messages)
+
+    def __iter__(self):
+        return iter(self._messages)
+
+    def __getitem__(self, pos):
+        return self._messages[pos]
+
+    def __str__(self):
+        return '%s(frame=%d, timestamp=%f, message_count=%d)' % (type(self).__name__, self.frame, self.timestamp,
+                                                                 len(self._messages))
+
+
+class CAMEvent(_V2XEvent):
+    """carla.CAMEvent: the CAMs a sensor.other.v2x received in one step (sent only when any)."""
+    _message = CAMMessage
+
+
+class CustomV2XEvent(_V2XEvent):
+    """carla.CustomV2XEvent: the messages a sensor.other.v2x_custom received in one step."""
+    _message = CustomV2XData
+
+
+def _v2x_event(sample, world):
+    msgs = sample.fields()['messages']
+    custom = bool(msgs) and _int32s(msgs[0][2][:8], 2)[1] == 0  # message id 0: custom
+    return (CustomV2XEvent if custom else CAMEvent)(sample, world)
+
+
+_CLASSES = {'v2x': _v2x_event, 'imu': IMUMeasurement, 'gnss': GnssMeasurement, 'radar': RadarMeasurement,
             'collision': CollisionEvent, 'lane_invasion': LaneInvasionEvent, 'obstacle': ObstacleDetectionEvent}
 _IMAGE_CLASSES = {'flow_f32x2': OpticalFlowImage, 'dvs_events': DVSEventArray}
 

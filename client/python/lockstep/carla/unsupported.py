@@ -25,7 +25,6 @@ add_unsupported(Sensor, {
     'enable_for_ros': 'there is no ROS bridge; the DDS topics are the interface (docs/topics.md)',
     'disable_for_ros': 'there is no ROS bridge',
     'is_enabled_for_ros': 'there is no ROS bridge',
-    'send': 'only V2X sensors take messages, and there are none',
 })
 add_unsupported(Map, {
     'save_to_disk': 'the .xodr file the run was started with is the map',

@@ -706,26 +706,35 @@ class World:
     def get_environment_objects(self, object_type=None):
         unsupported('World.get_environment_objects', 'the static scene is not exposed over the wire')
 
+    def _rays(self):
+        """The client's ray queries (lockstep.RayCaster): the town's meshes of the map in use,
+        built once per map, with the sensors service's semantic tags, and the actor boxes of the
+        latest frame, as the LiDAR sees them."""
+        rays = getattr(self, '_ray_caster', None)
+        if rays is None:
+            from lockstep._lockstep import RayCaster
+            rays = self._ray_caster = RayCaster(self._client)
+        return rays
+
     def cast_ray(self, initial_location, final_location):
-        unsupported('World.cast_ray', 'ray casts run inside the sensors service, not in clients')
+        """CARLA's: a carla.LabelledPoint for every object the segment crosses, nearest first,
+        each object once (its first surface), labelled with its carla.CityObjectLabel."""
+        hits = self._rays().cast_ray(to_enu_vector(initial_location), to_enu_vector(final_location))
+        return [LabelledPoint(from_enu_vector(p, Location), label) for p, label in hits]
 
     def ground_projection(self, location, search_distance):
-        """CARLA's: the first surface straight below `location` within `search_distance` m,
-        as a carla.LabelledPoint, None if there is none. Lockstep's client has the map, not
-        the scene's meshes: the surface is the OpenDRIVE lane under the point (Roads, or
-        Sidewalks for sidewalk lanes); off the lanes it finds nothing."""
-        from .map import LaneType
-        wp = self.get_map().get_waypoint(location, project_to_road=False, lane_type=LaneType.Any)
-        if wp is None:
-            return None
-        z = wp.transform.location.z
-        if not 0.0 <= location.z - z <= float(search_distance):
-            return None
-        label = 2 if wp.lane_type == LaneType.Sidewalk else 1  # CityObjectLabel.Sidewalks / Roads
-        return LabelledPoint(Location(location.x, location.y, z), label)
+        """CARLA's: project_point(location, straight down, search_distance): the first surface
+        below `location` within `search_distance` m, as a carla.LabelledPoint, None if none."""
+        return self.project_point(location, Vector3D(0.0, 0.0, -1.0), search_distance)
 
     def project_point(self, location, direction, search_distance):
-        unsupported('World.project_point', 'ray casts run inside the sensors service, not in clients')
+        """CARLA's: the first surface along `direction` within `search_distance` m of
+        `location` as a carla.LabelledPoint, None if there is none."""
+        hit = self._rays().project_point(to_enu_vector(location), to_enu_vector(direction), float(search_distance))
+        if hit is None:
+            return None
+        p, label = hit
+        return LabelledPoint(from_enu_vector(p, Location), label)
 
     def load_map_layer(self, map_layers):
         unsupported('World.load_map_layer', 'Lockstep towns have no Unreal layers')

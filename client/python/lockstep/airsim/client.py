@@ -1582,6 +1582,11 @@ class MultirotorClient(VehicleClient):
             return _DoneFuture()
         a = self._s.actor(vehicle_name)
         end = self._s.sim_time() + min(float(duration), 1e5)
+        if not self._mc.is_api_control_enabled(vehicle_name):
+            # simple_flight refuses the goals without API control: the call waits out its duration.
+            log.warning("airsim: moveByManualAsync on vehicle '%s' without API control: it does not steer the vehicle",
+                        vehicle_name or 'default')
+            return _TimedFuture(self._s, end)
         self._s.manual[a] = (vx_max, vy_max, z_min, end, drivetrain, yaw_mode)
         rc = self._s.rc.get(a)
         if rc is not None:
@@ -1683,11 +1688,6 @@ class MultirotorClient(VehicleClient):
         for name, values in (('i', ki), ('d', kd)):
             if name not in terms and any(values):
                 _unsupported('%s with k%s' % (call, name), "air_sim's %s loop has no %s term" % (
-        if not self._mc.is_api_control_enabled(vehicle_name):
-            # simple_flight refuses the goals without API control: the call waits out its duration.
-            log.warning("airsim: moveByManualAsync on vehicle '%s' without API control: it does not steer the vehicle",
-                        vehicle_name or 'default')
-            return _TimedFuture(self._s, end)
                     loop.replace('_', ' '), {'i': 'integral', 'd': 'derivative'}[name]))
         self._mc.set_gains(loop, list(zip(kp, ki, kd)), vehicle_name)
 

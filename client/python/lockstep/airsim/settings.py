@@ -336,6 +336,11 @@ def parse(text, path='settings.json'):
     return s
 
 
+# What AirSim writes to a missing settings.json at start (and getSettingsString then returns).
+DEFAULT_TEXT = ('{\n  "SeeDocsAt": "https://github.com/Microsoft/AirSim/blob/main/docs/settings.md",\n'
+                '  "SettingsVersion": 1.2\n}')
+
+
 def load(path=None):
     """The settings at `path` (default settings_path()); AirSim's defaults when there is no file
     (its text AirSim's default file's; the file is not written)."""
@@ -343,13 +348,8 @@ def load(path=None):
     if not os.path.exists(path):
         s = Settings()
         s.sim_mode = 'Multirotor'
+        s.text = DEFAULT_TEXT
         return s
     with open(path, encoding='utf-8-sig') as f:
         text = f.read()
     return parse(text, path)
-# What AirSim writes to a missing settings.json at start (and getSettingsString then returns).
-DEFAULT_TEXT = ('{\n  "SeeDocsAt": "https://github.com/Microsoft/AirSim/blob/main/docs/settings.md",\n'
-                '  "SettingsVersion": 1.2\n}')
-
-
-        s.text = DEFAULT_TEXT

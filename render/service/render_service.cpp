@@ -61,10 +61,10 @@ msg::ImageEncoding EncodingOf(ImageKind k) {
     case ImageKind::kFlow: return E::IMAGE_FLOW_F32X2;
     case ImageKind::kDvs: return E::IMAGE_DVS_EVENTS;
     case ImageKind::kAirSimDepthPerspective: return E::IMAGE_DEPTH_PERSPECTIVE_F32;
-    case ImageKind::kAirSimDepthVis:
-    case ImageKind::kAirSimInfrared: return E::IMAGE_GRAY8;
+    case ImageKind::kAirSimDepthVis: return E::IMAGE_GRAY8;
     case ImageKind::kAirSimDisparityNormalized: return E::IMAGE_DISPARITY_F32;
-    case ImageKind::kAirSimSegmentation: return E::IMAGE_SEGMENTATION_BGRA8;
+    case ImageKind::kAirSimSegmentation:
+    case ImageKind::kAirSimInfrared: return E::IMAGE_INSTANCE_BGRA8;  // instances: the airsim client colours them
   }
   return E::IMAGE_BGRA8;
 }

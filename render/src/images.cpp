@@ -77,8 +77,7 @@ int BytesPerPixel(ImageKind k) {
   switch (k) {
     case ImageKind::kDvs: return 0;
     case ImageKind::kFlow: return 8;
-    case ImageKind::kAirSimDepthVis:
-    case ImageKind::kAirSimInfrared: return 1;
+    case ImageKind::kAirSimDepthVis: return 1;
     default: return 4;
   }
 }
@@ -156,6 +155,10 @@ void EncodeImage(ImageKind k, const Camera& cam, const CameraImages& im, std::ui
       }
       return;
     case ImageKind::kInstance:
+    // AirSim's segmentation and infrared colour AirSim's object ids, which are the airsim
+    // client's state (simSetSegmentationObjectID): the image carries the instances it maps.
+    case ImageKind::kAirSimSegmentation:
+    case ImageKind::kAirSimInfrared:
       need(im.labels, "labels");
       for (std::size_t i = 0; i < n; ++i) {
         dst[i * 4 + 0] = im.labels[i * 4 + 2];  // B: instance high byte
@@ -163,21 +166,6 @@ void EncodeImage(ImageKind k, const Camera& cam, const CameraImages& im, std::ui
         dst[i * 4 + 2] = im.labels[i * 4];      // R: tag
         dst[i * 4 + 3] = 255;
       }
-      return;
-    case ImageKind::kAirSimSegmentation:
-      need(im.labels, "labels");
-      for (std::size_t i = 0; i < n; ++i) {
-        const std::uint32_t id = im.labels[i * 4 + 1] | (im.labels[i * 4 + 2] << 8) | (im.labels[i * 4 + 3] << 16);
-        const std::uint32_t h = (id == 0 ? im.labels[i * 4] + 0x51u : id) * 2654435761u;
-        dst[i * 4 + 0] = static_cast<std::uint8_t>(h >> 8);
-        dst[i * 4 + 1] = static_cast<std::uint8_t>(h >> 16);
-        dst[i * 4 + 2] = static_cast<std::uint8_t>(h >> 24);
-        dst[i * 4 + 3] = 255;
-      }
-      return;
-    case ImageKind::kAirSimInfrared:
-      need(im.labels, "labels");
-      for (std::size_t i = 0; i < n; ++i) dst[i] = im.labels[i * 4 + 1];
       return;
     case ImageKind::kDvs: throw std::invalid_argument("EncodeImage: DVS gives events, see DvsSensor");
   }

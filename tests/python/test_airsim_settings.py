@@ -2,7 +2,7 @@
 their settings poses from the player start, a camera with its resolution and mount, LiDARs
 with their settings and data frame, AirSim's image types on a known scene, reset() to the
 settings poses, armDisarm without API control, API control across processes, a camera over
-the Image bound."""
+the Image bound, AirSim's segmentation object ids."""
 import json
 import math
 import os
@@ -256,6 +256,40 @@ def test_a_camera_over_the_image_bound_arrives_whole(client):
         assert float(img.reshape(1100, 2000, 3).std()) > 1.0   # a rendered scene, not an empty buffer
     finally:
         client._s.sensors.drop(lambda key: key[2] == 'wide')   # 2.2 Mpx a frame: not for the rest of the module
+
+
+def test_segmentation_and_infrared_show_airsims_object_ids(client):
+    """Segmentation: AirSim's palette colour of each object's id (seg_rgbs.txt, as BGR bytes);
+    Infrared: the id as grey. Ids are AirSim's defaults (5 + the name's letters, mod 256) until
+    simSetSegmentationObjectID sets them (a regular expression over the town's objects); -1 hides."""
+    if not has_service('render'):
+        pytest.skip('needs render')
+    import airsim
+    _lift(client)
+    assert client.simGetSegmentationObjectID('ground') == (5 + sum(map(ord, 'ground'))) % 256
+    assert client.simGetSegmentationObjectID('no_such_object') == -1
+    assert client.simListSceneObjects('building_.*') and 'ground' in client.simListSceneObjects()
+    assert math.isfinite(client.simGetObjectPose('ground').position.x_val)
+    under = '(ground|road|sidewalk|verge|markings).*'
+    assert client.simSetSegmentationObjectID(under, 42, True) is True
+    assert client.simSetSegmentationObjectID('no_such_object', 42) is False
+    reqs = [airsim.ImageRequest('probe', airsim.ImageType.Segmentation, False, False),
+            airsim.ImageRequest('probe', airsim.ImageType.Infrared, False, False)]
+    client.simGetImages(reqs, 'Drone1')   # spawns the cameras
+    client._client.tick()
+
+    def centre():
+        seg, ir = client.simGetImages(reqs, 'Drone1')
+        s = np.frombuffer(seg.image_data_uint8, np.uint8).reshape(seg.height, seg.width, 3)
+        i = np.frombuffer(ir.image_data_uint8, np.uint8).reshape(ir.height, ir.width, 3)
+        return tuple(int(v) for v in s[seg.height // 2, seg.width // 2]), tuple(int(v) for v in i[ir.height // 2, ir.width // 2])
+
+    assert centre() == ((106, 31, 92), (42, 42, 42))   # palette[42] is RGB (92, 31, 106)
+    assert client.simGetSegmentationObjectID('ground') == 42
+    client.simSetSegmentationObjectID(under, -1, True)
+    assert centre() == ((0, 0, 0), (0, 0, 0))
+    client.simSetSegmentationObjectID(under, 7, True)
+    assert centre() == ((195, 176, 115), (7, 7, 7))   # palette[7] is RGB (115, 176, 195)
 
 
 def test_car_client_drives_a_ground_sim_car(client):

@@ -6,6 +6,7 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
 #include <map>
 #include <memory>
 
@@ -17,6 +18,8 @@
 #include "lockstep/client/client.h"
 #include "lockstep/client/multirotor.h"
 #include "lockstep/map/map.h"
+#include "lockstep/map/scene.h"
+#include "lockstep/map/scene_mesh.h"
 #include "lockstep/runtime/error.h"
 
 namespace py = pybind11;
@@ -622,6 +625,36 @@ PYBIND11_MODULE(_lockstep, m) {
              py::list out;
              if (s.ground) {
                for (const auto& l : s.ground->traffic_lights()) out.append(LightToDict(l));
+             }
+             return out;
+           })
+      // The town's static objects as the services build them (the map's scene, else the one
+      // generated from the run seed): (name, mesh instance id, semantic tag, (min xyz), (max xyz)).
+      .def("scene_objects",
+           [](Client& c) {
+             std::vector<map::Mesh> meshes;
+             {
+               python::ReleaseGil release;
+               const std::optional<msg::MapData> data = c.map_data();
+               if (!data || data->opendrive().empty()) throw ClientError("scene_objects(): the simulation has no map loaded");
+               const map::Map town = map::Map::FromString(data->opendrive(), data->name().to_string());
+               const map::Scene sc = data->scene().empty()
+                                         ? map::GenerateScene(town, c.world_info().seed())
+                                         : map::SceneFromYaml(data->scene(), data->name().to_string() + ".scene.yaml");
+               meshes = map::BuildWorldMeshes(town, sc);
+             }
+             py::list out;
+             for (const map::Mesh& m : meshes) {
+               double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
+               for (std::size_t i = 0; i + 2 < m.vertices.size(); i += 3) {
+                 for (int k = 0; k < 3; ++k) {
+                   lo[k] = std::min(lo[k], static_cast<double>(m.vertices[i + k]));
+                   hi[k] = std::max(hi[k], static_cast<double>(m.vertices[i + k]));
+                 }
+               }
+               if (m.vertices.empty()) continue;
+               out.append(py::make_tuple(m.name, m.instance_id, m.semantic_tag, py::make_tuple(lo[0], lo[1], lo[2]),
+                                         py::make_tuple(hi[0], hi[1], hi[2])));
              }
              return out;
            })

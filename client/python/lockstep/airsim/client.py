@@ -24,6 +24,7 @@ import numpy as np
 import lockstep
 
 from . import geometry as geo
+from . import segmentation as seg
 from . import settings as settings_mod
 from .types import (AngleLevelControllerGains, AngleRateControllerGains, BarometerData, Box2D, Box3D, CameraInfo,
                     CarState, CollisionInfo, DetectionInfo, DistanceSensorData, DrivetrainType, EnvironmentState,
@@ -283,6 +284,8 @@ class _Shared:
         self.rc = {}            # actor -> RCData
         self.trace = {}         # actor -> (rgba, thickness)
         self.seg_ids = {}       # object name -> id (simSetSegmentationObjectID)
+        self.statics = None     # the town's static objects: name -> (mesh instance id, tag, centre ENU)
+        self.static_names = {}  # mesh instance id -> name
         self.detection = {}     # (actor, camera, image_type) -> {'filters': [...], 'radius_cm': ...}
         self.recording = False
         self.weather_enabled = False
@@ -321,6 +324,8 @@ class _Shared:
         self.cameras.clear()
         self.manual.clear()
         self.spawned_objects.clear()
+        self.statics = None
+        self.static_names = {}
         if s.path:
             info = self.client.world_info()['settings']
             if abs(info.get('real_time_factor', 1.0) - s.clock_speed) > 1e-9 and s.clock_speed != 1.0:
@@ -774,6 +779,15 @@ class VehicleClient:
             pass
         arr = np.asarray(s.array())
         resp.height, resp.width = int(arr.shape[0]), int(arr.shape[1])
+        if it in (ImageType.Segmentation, ImageType.Infrared):
+            # AirSim's: the object id's palette colour (Segmentation) or the id as grey (Infrared);
+            # a hidden object (-1) is black.
+            ids = self._object_ids(arr)
+            if it == ImageType.Segmentation:
+                lut = np.asarray([c[::-1] for c in seg.PALETTE] + [(0, 0, 0)], np.uint8)   # BGR; -1 -> black
+                arr = lut[np.where(ids < 0, 256, ids)]
+            else:
+                arr = np.repeat(np.clip(ids, 0, 255).astype(np.uint8)[..., None], 3, axis=2)
         _encode(resp, it, arr)
         return resp
 
@@ -981,9 +995,27 @@ class VehicleClient:
             out[name] = actor
         return out
 
+    def _statics(self):
+        """The town's static objects (its meshes as the services build them: ground, road_<id>,
+        sidewalk_<id>, building_<i>_<design>, tree_<i>, <prop>_<i>_pole, ...): name -> (mesh
+        instance id, semantic tag, centre world ENU)."""
+        s = self._s
+        with s.lock:
+            s.begin_run()
+            if s.statics is None:
+                try:
+                    objs = self._client.scene_objects()
+                except lockstep.ClientError:
+                    objs = []
+                s.statics = {n: (inst, tag, tuple((a + b) / 2.0 for a, b in zip(lo, hi))) for n, inst, tag, lo, hi in objs}
+                s.static_names = {inst: n for n, (inst, _, _) in s.statics.items()}
+            return s.statics
+
     def simListSceneObjects(self, name_regex='.*'):
+        """The run's actors and the town's static objects whose names match (AirSim: the level's actors)."""
         rx = re.compile(name_regex)
-        return sorted(n for n in self._objects() if rx.fullmatch(n))
+        names = set(self._objects()) | set(self._statics())
+        return sorted(n for n in names if rx.fullmatch(n))
 
     def _object_home(self):
         sx, sy, sz = self._s.start()
@@ -994,6 +1026,9 @@ class VehicleClient:
         actor = self._objects().get(object_name)
         st = self._client.state(actor) if actor is not None else None
         if st is None:
+            town = self._statics().get(object_name)
+            if town is not None:   # a static object: the centre of its bounds, unrotated
+                return Pose(_v(geo.enu_to_ned_pos(town[2], self._object_home())), Quaternionr())
             return Pose.nanPose()
         t = st['transform']
         return Pose(_v(geo.enu_to_ned_pos(t[:3], self._object_home())), geo.enu_to_ned_quat(t[3:7]))
@@ -1055,22 +1090,53 @@ class VehicleClient:
 
     # --- segmentation and detections ---
     def simSetSegmentationObjectID(self, mesh_name, object_id, is_name_regex=False):
-        if not 0 <= int(object_id) <= 255:
-            raise lockstep.ClientError('simSetSegmentationObjectID: object_id must be in 0..255, got %r' % (object_id,))
-        names = self._objects()
-        hit = [n for n in names if (re.fullmatch(mesh_name, n) if is_name_regex else n == mesh_name)]
+        """AirSim's: the object id (0..255; -1 hides the object) of every object named
+        `mesh_name` (a regular expression matched case-insensitively when is_name_regex);
+        True when one matched. The Segmentation and Infrared images show it from the next image."""
+        if not -1 <= int(object_id) <= 255:
+            raise lockstep.ClientError('simSetSegmentationObjectID: object_id must be in -1..255, got %r' % (object_id,))
+        names = set(self._objects()) | set(self._statics())
+        if is_name_regex:
+            rx = re.compile(mesh_name, re.IGNORECASE)
+            hit = [n for n in names if rx.fullmatch(n)]
+        else:
+            hit = [n for n in names if n == mesh_name]
         for n in hit:
             self._s.seg_ids[n] = int(object_id)
-        if hit:
-            _unsupported('simSetSegmentationObjectID', "the render service colours segmentation by its own "
-                         "instance ids (the id is not sent to it)")
-        return False
+        return bool(hit)
 
     def simGetSegmentationObjectID(self, mesh_name):
+        """The object's id (AirSim's default from its name until set); -1 when there is no such object."""
         if mesh_name in self._s.seg_ids:
             return self._s.seg_ids[mesh_name]
-        actor = self._objects().get(mesh_name)
-        return -1 if actor is None else actor % 256
+        if mesh_name in self._objects() or mesh_name in self._statics():
+            return seg.default_object_id(mesh_name)
+        return -1
+
+    def _object_ids(self, arr):
+        """AirSim object ids (-1 hidden) of an instance image (B instance high, G low, R tag):
+        a static mesh is instance 0x8000 + its mesh id, an actor its actor id."""
+        inst = arr[..., 1].astype(np.int32) | (arr[..., 0].astype(np.int32) << 8)
+        key = np.where(inst > 0, inst * 256, arr[..., 2].astype(np.int32))
+        uniq, inverse = np.unique(key, return_inverse=True)
+        self._statics()   # fills static_names
+        actors = {}
+        for name, actor in self._objects().items():
+            actors.setdefault(actor, name)   # a drone's vehicle name, else role_name, else <kind>_<id>
+        ids = []
+        for k in uniq.tolist():
+            i = k // 256
+            if i >= 0x8000:
+                name = self._s.static_names.get(i - 0x8000, '')
+            elif i > 0:
+                name = actors.get(i, '')
+            else:
+                name = 'Sky' if k == 11 else ''   # no mesh: the sky, or nothing
+            if name in self._s.seg_ids:
+                ids.append(self._s.seg_ids[name])
+            else:
+                ids.append(seg.default_object_id(name) if name else 0)
+        return np.asarray(ids, np.int32)[inverse].reshape(inst.shape)
 
     def _detection(self, camera_name, image_type, vehicle_name):
         a, cam, _, _, _ = self._camera(vehicle_name, camera_name, 'simGetDetections')

@@ -26,9 +26,9 @@ enum class ImageKind {
   kAirSimDepthPerspective,     // float32 m, to the camera centre
   kAirSimDepthVis,             // gray8: 0 at the camera, 255 at 100 m or more
   kAirSimDisparityNormalized,  // float32 0..1: f * 0.25 m / depth / width (AirSim's stereo baseline)
-  kAirSimSegmentation,         // BGRA8 colour per object (instance id)
-  kAirSimSurfaceNormals,       // BGRA8 as kNormals
-  kAirSimInfrared,             // gray8: object id (instance id mod 256)
+  kAirSimSegmentation,         // BGRA8 as kInstance (tag in R, instance id in G and B): the airsim client
+  kAirSimSurfaceNormals,       // BGRA8 as kNormals                    turns instances into AirSim's object
+  kAirSimInfrared,             // BGRA8 as kInstance                   ids (its state) and their colours
 };
 
 // "rgb", "depth", ... / AirSim's names "Scene", "DepthPlanar", ...; throws std::invalid_argument.

@@ -234,14 +234,16 @@ class VectorEnv:
         ctx = multiprocessing.get_context('spawn')
         self.domains = list(domains)
         self.conns, self.procs = [], []
+        spaces = []
         for d in self.domains:
+            # One at a time: N simulations starting at once on a small machine time out.
             parent, child = ctx.Pipe()
             p = ctx.Process(target=_worker, args=(child, d, kwargs), daemon=True)
             p.start()
             child.close()
             self.conns.append(parent)
             self.procs.append(p)
-        spaces = [self._recv(c) for c in self.conns]
+            spaces.append(self._recv(parent))
         self.observation_space, self.action_space = spaces[0]
         self.num_envs = n
 

@@ -83,7 +83,7 @@ class Simulation:
         self.proc = subprocess.Popen([os.path.join(bin_dir, 'lockstep'), 'up', self.config, '--domain', str(domain)],
                                      stdout=self.log, stderr=subprocess.STDOUT, preexec_fn=_end_with_parent)
         import lockstep
-        self.native = lockstep.Client(domain=domain, timeout=30)
+        self.native = lockstep.Client(domain=domain, timeout=timeout)   # a loaded machine starts slowly
         if not self.native.wait_ready(timeout):
             self.stop()
             raise RuntimeError('simulation not ready: %s' % open(self.log_path).read()[-2000:])

@@ -328,7 +328,9 @@ def main():
                                                                                  infractions['lane_invasion']),
                  '  ego drove %.1f m, the drone flew %.1f m and ended %.1f m above the ego' % (
                      summary['ego_distance_m'], summary['drone_distance_m'], summary['drone_height_above_ego_m']),
-                 '  output: %s (images/, lidar/, ticks.csv, summary.json, town.png)' % os.path.relpath(args.out)]
+                 '  output: %s (images/, lidar/, ticks.csv, summary.json, town.png)' % os.path.relpath(args.out),
+                 '  driving benchmarks (CoRL 2017, NoCrash, Leaderboard routes; docs/benchmarks.md): '
+                 'build/bin/lockstep python -m lockstep.benchmarks corl2017 --agent autopilot --episodes 2']
         with open(os.path.join(args.out, 'summary.txt'), 'w') as f:
             f.write('\n'.join(lines) + '\n')
         town_picture(world_map, trajectories, os.path.join(args.out, 'town.png'))

@@ -54,6 +54,7 @@ def test_showcase(sim):
     out_dir = os.path.join(sim.dir, 'showcase')
     out = run(sim, 'showcase.py', '--connect', '--ticks', '40', '--out', out_dir, '--cars', '3', '--walkers', '2')
     assert 'Lockstep showcase' in out
+    assert 'lockstep python -m lockstep.benchmarks corl2017' in out   # the summary says how to run a benchmark
     summary = json.load(open(os.path.join(out_dir, 'summary.json')))
     assert summary['ticks'] == 40
     assert summary['ground_air_frame_alignment'] == '40/40 ticks'

@@ -27,6 +27,7 @@
 #include "lockstep/runtime/log.h"
 #include "lockstep/runtime/shm_sweep.h"
 #include "log_command.h"
+#include "hashes.h"
 #include "progress.h"
 #include "serve.h"
 #include "supervisor.h"
@@ -294,6 +295,17 @@ int main(int argc, char** argv) {
   status->add_option("--participant-profile", profile, "Fast DDS participant profile");
   status->add_flag("--json", json, "one JSON object");
 
+  auto* hashes = app.add_subcommand("hashes", "print each completed frame's world hash of a running simulation "
+                                             "(compare two deployments of one config)");
+  lockstep::launcher::HashesOptions hashes_options;
+  hashes->add_option("--domain", hashes_options.domain, "DDS domain id")->capture_default_str();
+  hashes->add_option("--participant-profile", hashes_options.participant_profile, "Fast DDS participant profile")
+      ->capture_default_str();
+  hashes->add_option("--until", hashes_options.until, "stop after this frame (0: until Ctrl-C)")->capture_default_str();
+  hashes->add_option("--timeout", hashes_options.timeout_s, "give up after this many seconds without a frame")
+      ->capture_default_str()
+      ->check(CLI::PositiveNumber);
+
   auto* map = app.add_subcommand("map", "map tools (see lockstep-map --help)");
   map->prefix_command();
 
@@ -315,6 +327,7 @@ int main(int argc, char** argv) {
     if (*up) return Up(config_file, domain, !no_coordinator);
     if (*serve) return Serve(serve_options);
     if (*status) return Status(status_domain, profile, wait_s, json);
+    if (*hashes) return lockstep::launcher::PrintFrameHashes(hashes_options, g_stop);
     if (*log_cmd) return lockstep::launcher::LogCommand(log_cmd->remaining(), g_stop);
     if (*map) {
       const std::string tool = BinDir() + "/lockstep-map";

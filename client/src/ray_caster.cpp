@@ -45,6 +45,17 @@ struct RayCaster::Impl {
     std::vector<s::Actor> actors;
     if (snap.ground) s::AppendActors(*snap.ground, &actors);
     if (snap.air) s::AppendActors(*snap.air, &actors);
+    // Custom props (custom.<name>), as the sensors service places them: the declared box on
+    // the spawn transform, relative to the parent's mount.
+    std::vector<s::CustomProp> props;
+    std::optional<BlueprintLibrary> library;
+    for (const ActorInfo& info : client.actors()) {
+      if (info.blueprint.rfind("custom.", 0) != 0) continue;
+      if (!library) library = client.blueprints(0.5);
+      if (auto d = library->Find(info.blueprint)) props.push_back(s::MakeCustomProp(*d, info.id, info.parent, info.spawn_pose));
+    }
+    std::sort(props.begin(), props.end(), [](const s::CustomProp& a, const s::CustomProp& b) { return a.id < b.id; });
+    s::AppendProps(props, &actors);
     std::sort(actors.begin(), actors.end(), [](const s::Actor& a, const s::Actor& b) { return a.id < b.id; });
     scene.SetActors(actors);
   }

@@ -51,4 +51,41 @@ void AppendActors(const msg::AirState& air, std::vector<Actor>* out) {
   }
 }
 
+CustomProp MakeCustomProp(const msg::BlueprintDeclaration& d, uint32_t id, uint32_t parent, const msg::Pose& transform) {
+  CustomProp p;
+  p.id = id;
+  p.parent = parent;
+  p.transform = FromWire(transform);
+  p.half_extents = FromWire(d.half_extents());
+  // Tags "custom,<name>,<Class>" (render/service): the class gives the semantic tag.
+  const std::string tags = d.tags().to_string();
+  const auto last = tags.rfind(',');
+  const int tag = last == std::string::npos ? -1 : TagFromClassName(tags.substr(last + 1));
+  p.tag = static_cast<uint8_t>(tag >= 0 ? tag : 20);  // Static when the class is not given
+  return p;
+}
+
+void AppendProps(const std::vector<CustomProp>& props, std::vector<Actor>* actors) {
+  for (const auto& p : props) {
+    Actor a;
+    a.id = p.id;
+    a.kind = ActorKind::kOther;
+    a.tag = p.tag;
+    a.half_extents = p.half_extents;
+    a.pose = p.transform;
+    if (p.parent) {
+      const Actor* parent = nullptr;
+      for (const auto& c : *actors) {
+        if (c.id == p.parent) parent = &c;
+      }
+      if (!parent) continue;  // the parent is not in this frame
+      // Relative to the parent's mount, as the render service draws them (vehicles and
+      // walkers: the bottom of their box).
+      a.pose = MountPose(*parent).Compose(p.transform);
+      a.velocity = parent->velocity;
+    }
+    actors->push_back(std::move(a));
+  }
+}
+
 }  // namespace lockstep::sensors

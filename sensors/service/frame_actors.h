@@ -18,4 +18,19 @@ Pose FromWire(const msg::Pose& p);
 void AppendActors(const msg::GroundState& g, std::vector<Actor>* out);
 void AppendActors(const msg::AirState& a, std::vector<Actor>* out);
 
+// A spawned custom.<name> prop (an asset another service imported and declared): the box its
+// declaration gives, with the semantic class its tags name ("custom,<name>,<Class>"; Static
+// when none), at its spawn transform relative to its parent's mount (world if no parent).
+struct CustomProp {
+  uint32_t id = 0;
+  uint32_t parent = 0;
+  Pose transform;
+  Vec3 half_extents = Vec3::Zero();
+  uint8_t tag = 20;
+};
+CustomProp MakeCustomProp(const msg::BlueprintDeclaration& declaration, uint32_t id, uint32_t parent, const msg::Pose& transform);
+// Appends the props, in order, whose parent (if any) is among `actors` (the frame's actors and
+// the props appended before), placed on it.
+void AppendProps(const std::vector<CustomProp>& props, std::vector<Actor>* actors);
+
 }  // namespace lockstep::sensors

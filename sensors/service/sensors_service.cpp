@@ -298,16 +298,7 @@ void SensorsService::AddCustomProp(const msg::SpawnActor& sp, const msg::FrameSt
   for (const auto& [service, set] : declarations_.Live()) {
     for (const auto& d : set.blueprints()) {
       if (d.id().to_string() != bp) continue;
-      // Tags "custom,<name>,<Class>" (render/service): the class gives the semantic tag.
-      const std::string tags = d.tags().to_string();
-      const auto last = tags.rfind(',');
-      const int tag = last == std::string::npos ? -1 : s::TagFromClassName(tags.substr(last + 1));
-      CustomProp p;
-      p.parent = sp.parent();
-      p.transform = ToPose(sp.transform());
-      p.half_extents = ToVec(d.half_extents());
-      p.tag = static_cast<uint8_t>(tag >= 0 ? tag : 20);  // Static when the class is not given
-      props_[sp.actor()] = p;
+      props_[sp.actor()] = s::MakeCustomProp(d, sp.actor(), sp.parent(), sp.transform());
       return;
     }
   }
@@ -337,24 +328,9 @@ s::WorldFrame SensorsService::Gather(const msg::Tick& tick, uint64_t frame, s::F
   }
   // Custom props: their declared box at the spawn transform, relative to the parent's mount
   // as the render service draws them (vehicles and walkers: the bottom of their box).
-  for (const auto& [id, p] : props_) {
-    s::Actor a;
-    a.id = id;
-    a.kind = s::ActorKind::kOther;
-    a.tag = p.tag;
-    a.half_extents = p.half_extents;
-    a.pose = p.transform;
-    if (p.parent) {
-      const s::Actor* parent = nullptr;
-      for (const auto& c : f.actors) {
-        if (c.id == p.parent) parent = &c;
-      }
-      if (!parent) continue;  // the parent is not in this frame
-      a.pose = s::MountPose(*parent).Compose(p.transform);
-      a.velocity = parent->velocity;
-    }
-    f.actors.push_back(std::move(a));
-  }
+  std::vector<s::CustomProp> props;
+  for (const auto& [id, p] : props_) props.push_back(p);
+  s::AppendProps(props, &f.actors);
   std::sort(f.actors.begin(), f.actors.end(), [](const s::Actor& a, const s::Actor& b) { return a.id < b.id; });
   if (world_->HasEventSensors() && !event_publishers_.empty()) {
     auto batches = events_.WaitFor(tick.run(), frame, event_publishers_, timeout);

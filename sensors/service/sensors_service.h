@@ -15,6 +15,7 @@
 #include "lockstep/runtime/declarations.h"
 #include "lockstep/runtime/frame_buffer.h"
 #include "lockstep/runtime/service.h"
+#include "frame_actors.h"
 #include "lockstep/sensors/sensor_world.h"
 #include "sample_writer.h"
 
@@ -67,13 +68,6 @@ class SensorsService final : public ServiceCore {
   void AddCustomProp(const msg::SpawnActor& spawn, const msg::FrameStamp& stamp);
   const std::string& SpecialType(const std::string& vehicle_blueprint);
 
-  struct CustomProp {
-    uint32_t parent = 0;
-    sensors::Pose transform;  // relative to the parent's mount (world if none)
-    sensors::Vec3 half_extents;
-    uint8_t tag = 0;
-  };
-
   std::string name_;
   SensorsOptions options_;
   msg::PerceptionMode mode_ = msg::PerceptionMode::PERCEPTION_STRICT;
@@ -85,7 +79,7 @@ class SensorsService final : public ServiceCore {
   sensors::Weather weather_;
   std::unique_ptr<sensors::SensorWorld> world_;
   std::unique_ptr<SampleWriter> files_;
-  std::map<uint32_t, CustomProp> props_;  // custom props spawned in this run, by actor id
+  std::map<uint32_t, sensors::CustomProp> props_;  // custom props spawned in this run, by actor id
   std::map<std::string, std::string> special_types_;  // vehicle blueprint -> special_type
 
   // The town: meshes and geo reference of the current map, kept across runs.

@@ -505,5 +505,42 @@ TEST(SensorsCustomProps, ALidarHitsTheDeclaredBoxWithItsClass) {
   EXPECT_EQ(prop_points(3), 0) << "destroyed at frame 3";
 }
 
+// The custom-prop placement the service and the client's ray queries share (frame_actors.h):
+// the declared box and class, on the parent's mount; none without its parent in the frame.
+TEST(FrameActors, CustomPropsSitOnTheirParentsMountWithTheirDeclaredClass) {
+  msg::BlueprintDeclaration crate;
+  crate.id("custom.crate");
+  crate.tags("custom,crate,TrafficSign");
+  crate.half_extents().x(1.0);
+  crate.half_extents().y(0.5);
+  crate.half_extents().z(0.25);
+  msg::BlueprintDeclaration plain = crate;
+  plain.tags("custom,plain");
+  std::vector<sensors::Actor> actors;
+  msg::GroundState g;
+  msg::VehicleState v;
+  v.actor(7);
+  v.transform(MakePose(10, 0, 0.75, M_PI / 2));
+  v.half_extents().x(2.0);
+  v.half_extents().y(1.0);
+  v.half_extents().z(0.75);
+  g.vehicles({v});
+  sensors::AppendActors(g, &actors);
+  const std::vector<sensors::CustomProp> props{sensors::MakeCustomProp(crate, 50, 7, MakePose(1, 0, 0.25)),
+                                               sensors::MakeCustomProp(plain, 51, 0, MakePose(3, 4, 5)),
+                                               sensors::MakeCustomProp(crate, 52, 99, MakePose(0, 0, 0))};
+  sensors::AppendProps(props, &actors);
+  ASSERT_EQ(actors.size(), 3u) << "the prop on the absent actor 99 is not placed";
+  const sensors::Actor& on_car = actors[1];
+  EXPECT_EQ(on_car.id, 50u);
+  EXPECT_EQ(on_car.tag, 8);  // TrafficSign
+  EXPECT_EQ(on_car.kind, sensors::ActorKind::kOther);
+  EXPECT_NEAR((on_car.half_extents - sensors::Vec3(1.0, 0.5, 0.25)).norm(), 0.0, 1e-12);
+  // 1 m ahead of the car facing north, on the bottom of its box (z 0), 0.25 m up.
+  EXPECT_NEAR((on_car.pose.position - sensors::Vec3(10, 1, 0.25)).norm(), 0.0, 1e-9);
+  EXPECT_EQ(actors[2].tag, 20) << "Static without a class";
+  EXPECT_NEAR((actors[2].pose.position - sensors::Vec3(3, 4, 5)).norm(), 0.0, 1e-12);
+}
+
 }  // namespace
 }  // namespace lockstep

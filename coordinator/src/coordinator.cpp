@@ -25,6 +25,7 @@
 #include "lockstep/runtime/hash.h"
 #include "lockstep/runtime/log.h"
 #include "lockstep/runtime/messages.h"
+#include "playback.h"
 
 namespace lockstep {
 
@@ -134,6 +135,8 @@ struct Coordinator::Impl {
   std::string failed_service;
   std::string failure_reason;
   size_t next_scheduled = 0;                  // index into config.scenario
+  Playback playback{OpenRecordedLog, RecordedLogPath};  // CARLA's replay_file: the log's actors follow it
+  uint64_t playback_sequence = 0;
   std::map<std::string, uint32_t> aliases;    // scenario actor names -> actor ids
 
   // Statistics.
@@ -217,7 +220,7 @@ struct Coordinator::Impl {
   // complete the tick and start the next requested one (or wait for a request).
   bool CanChainSynchronous() const {
     return settings.synchronous_mode() && (state == RunState::RUN_RUNNING || state == RunState::RUN_READY) &&
-           inbox.empty() && !checking && !ScheduledDue(open_tick.frame() + 1) && AllAlive();
+           inbox.empty() && !checking && !ScheduledDue(open_tick.frame() + 1) && !playback.Busy() && AllAlive();
   }
   bool AllAlive() const {
     for (const auto& name : required_services) {
@@ -238,7 +241,7 @@ struct Coordinator::Impl {
   // The main loop's decisions would be "complete this tick, start the next one".
   bool CanChainTick() const {
     return state == RunState::RUN_RUNNING && !settings.synchronous_mode() && settings.real_time_factor() == 0 &&
-           inbox.empty() && !status_dirty && !checking && !ScheduledDue(open_tick.frame() + 1) &&
+           inbox.empty() && !status_dirty && !checking && !ScheduledDue(open_tick.frame() + 1) && !playback.Busy() &&
            (config.ticks == 0 || open_tick.frame() + 1 < config.ticks);
   }
 
@@ -518,6 +521,7 @@ struct Coordinator::Impl {
     ticks_requested = 0;
     next_scheduled = 0;
     aliases.clear();
+    playback.NewRun();
     PublishWorld();
     PublishMap();
     status_dirty = true;
@@ -558,11 +562,51 @@ struct Coordinator::Impl {
           continue;
         }
       }
+      // replay_file: the log must open and be of this map before the command is accepted.
+      if (kind == msg::CommandKind::CMD_RECORDER && c.body().recorder().action() == msg::RecorderAction::REPLAY_START &&
+          CheckReplayCommand(c.body().recorder()).empty()) {
+        std::string text;
+        const std::string why = playback.Prepare(c.body().recorder(), map_name, MapHash(), &text);
+        if (!why.empty()) {
+          reply.client(c.client());
+          reply.sequence_number(c.sequence_number());
+          reply.run(run);
+          reply.accepted(false);
+          reply.reason(why.substr(0, 511));
+          reply.text(text.substr(0, 1023));
+          spdlog::warn("rejected replay_file from '{}': {}", c.client().to_string(), why);
+          Post(reply_writer, reply);
+          continue;
+        }
+      }
       SyncLibrary();
       reply = commands.Submit(c, run, frame + 1 + (barrier.open() ? 1 : 0), settings.synchronous_mode(),
                               [this](const msg::SpawnActor& s) { return AskOwner(s); });
       if (reply.accepted()) {
         switch (kind) {
+          case msg::CommandKind::CMD_RECORDER: {
+            const auto action = c.body().recorder().action();
+            if (IsReplayAction(action)) {
+              // CARLA's replay_file stops a recording in course first (ACarlaRecorder::ReplayFile).
+              if (action == msg::RecorderAction::REPLAY_START && !commands.recording().empty()) {
+                msg::Command stop;
+                stop.client("playback");
+                stop.sequence_number(++playback_sequence);
+                msg::RecorderCommand r;
+                r.action(msg::RecorderAction::RECORDER_STOP);
+                stop.body().recorder(r);
+                commands.Submit(stop, run, reply.frame(), settings.synchronous_mode());
+              }
+              reply.text(playback.Apply(c.body().recorder()).substr(0, 1023));
+            } else if (action == msg::RecorderAction::RECORDER_START && playback.Busy()) {
+              // CARLA's start_recorder stops the replayer first (ACarlaRecorder::Start: Replayer.Stop()).
+              msg::RecorderCommand stop;
+              stop.action(msg::RecorderAction::REPLAY_STOP);
+              stop.flag(false);
+              playback.Apply(stop);
+            }
+            break;
+          }
           case msg::CommandKind::CMD_TICK:
             ticks_requested += c.body().tick_request().count();
             break;
@@ -609,6 +653,8 @@ struct Coordinator::Impl {
     std::vector<msg::Command> client = commands.TakePending();
     std::vector<msg::Command> batch = Scheduled(t.frame());
     batch.insert(batch.end(), client.begin(), client.end());
+    std::vector<msg::Command> replayed = Replayed(t.frame(), t.dt());
+    batch.insert(batch.end(), replayed.begin(), replayed.end());
     t.commands(std::move(batch));
     open_tick = t;
     ListActors(t);
@@ -681,6 +727,33 @@ struct Coordinator::Impl {
     }
     return commands.TakePending();
   }
+
+  // A replay's commands for `for_frame` (after the scenario's and the clients'), submitted
+  // as a client's under the name "playback". Main loop only (Busy() stops the chaining).
+  std::vector<msg::Command> Replayed(uint64_t for_frame, double dt) {
+    if (!playback.Busy()) return {};
+    SyncLibrary();
+    playback.Tick(
+        dt,
+        [&](const msg::CommandBody& body) {
+          msg::Command c;
+          c.client("playback");
+          c.sequence_number(++playback_sequence);
+          c.body(body);
+          msg::CommandReply r = commands.Submit(c, run, for_frame, settings.synchronous_mode(),
+                                                [this](const msg::SpawnActor& s) { return AskOwner(s); });
+          if (!r.accepted()) spdlog::debug("playback command refused: {}", r.reason().to_string());
+          return r;
+        },
+        [this](uint32_t id) -> const std::string* {
+          const auto& actors = commands.actors();
+          auto it = actors.find(id);
+          return it == actors.end() ? nullptr : &it->second.blueprint;
+        });
+    return commands.TakePending();
+  }
+
+  uint64_t MapHash() const { return Fnv1a64().Add(std::string_view(map_opendrive)).Add(std::string_view(map_scene)).value(); }
 
   // Before the process goes: the last FrameDone and RunStatus must reach their readers.
   void DrainWriters() {

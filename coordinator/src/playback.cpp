@@ -115,6 +115,16 @@ msg::CommandBody AutopilotBody(uint32_t actor, bool on) {
   return b;
 }
 
+msg::CommandBody VehicleLightsBody(uint32_t actor, uint32_t bits) {
+  msg::ActorPhysicsCommand p;
+  p.actor(actor);
+  p.kind(msg::ActorPhysicsKind::PHYSICS_SET_LIGHT_STATE);
+  p.light_state(bits);
+  msg::CommandBody b;
+  b.actor_physics(p);
+  return b;
+}
+
 msg::CommandBody LightBody(uint32_t actor, msg::TrafficLightColor state, bool freeze) {
   msg::TrafficLightCommand l;
   l.actor(actor);
@@ -315,6 +325,7 @@ void Playback::Destroy(uint32_t log_id, const PlaybackSubmit& submit) {
   targets_.erase(it->second);
   spawned_.erase(it->second);
   kinds_.erase(it->second);
+  vehicle_lights_set_.erase(it->second);
   mapped_.erase(it);
 }
 
@@ -325,6 +336,7 @@ void Playback::Forget() {
   kinds_.clear();
   heroes_.clear();
   lights_set_.clear();
+  vehicle_lights_set_.clear();
 }
 
 void Playback::Finish(bool keep_actors, bool destroy_spawned, const PlaybackSubmit& submit, const BlueprintOf& blueprint_of) {
@@ -385,6 +397,7 @@ void Playback::Tick(double dt, const PlaybackSubmit& submit, const BlueprintOf& 
       targets_.erase(it->second);
       spawned_.erase(it->second);
       kinds_.erase(it->second);
+      vehicle_lights_set_.erase(it->second);
       it = mapped_.erase(it);
     } else {
       ++it;
@@ -457,6 +470,14 @@ void Playback::Tick(double dt, const PlaybackSubmit& submit, const BlueprintOf& 
     if (kind == msg::ActorKind::ACTOR_SENSOR) continue;  // sensors ride on their parents
     auto n = next_poses.find(log_id);
     submit(TransformBody(m->second, n != next_poses.end() ? Interpolate(pose, n->second, per) : pose));
+  }
+  // Vehicle lights (CARLA's replayer sets them too), when they change.
+  for (const auto& v : frame.vehicle_lights) {
+    auto m = mapped_.find(v.id);
+    if (m == mapped_.end() || (ignore_hero_ && heroes_.count(v.id))) continue;
+    auto it = vehicle_lights_set_.find(m->second);
+    if (it != vehicle_lights_set_.end() && it->second == v.light_state) continue;
+    if (submit(VehicleLightsBody(m->second, v.light_state)).accepted()) vehicle_lights_set_[m->second] = v.light_state;
   }
   for (const auto& l : frame.lights) {
     const std::string* bp = blueprint_of(l.id);

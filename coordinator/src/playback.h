@@ -36,6 +36,11 @@ struct PlaybackPose {
   msg::Pose pose;           // world ENU, as the state of that frame reported it
 };
 
+struct PlaybackVehicleLights {
+  uint32_t id = 0;          // log id
+  uint32_t light_state = 0; // carla.VehicleLightState bits
+};
+
 struct PlaybackLight {
   uint32_t id = 0;          // log id (the map's lights: the same ids on the same map)
   msg::TrafficLightColor state = msg::TrafficLightColor::LIGHT_RED;
@@ -48,6 +53,7 @@ struct PlaybackFrame {
   std::vector<uint32_t> destroyed;      // destroyed by this frame's tick (children go with their parent)
   std::vector<PlaybackPose> poses;      // every vehicle, walker, drone and prop of the frame's state
   std::vector<PlaybackLight> lights;    // every traffic light of the frame's state
+  std::vector<PlaybackVehicleLights> vehicle_lights;  // every vehicle's light state
 };
 
 // What playback reads of a log (an adapter over the recorder's reader; tests give their own).
@@ -146,6 +152,7 @@ class Playback {
   std::map<uint32_t, msg::ActorKind> kinds_;                // run id -> kind, of the mapped actors
   std::set<uint32_t> heroes_;                               // log ids with role_name = hero
   std::map<uint32_t, msg::TrafficLightColor> lights_set_;   // run id -> state playback froze it in
+  std::map<uint32_t, uint32_t> vehicle_lights_set_;         // run id -> light bits playback set
   bool stop_pending_ = false;                               // REPLAY_STOP accepted, not yet applied
   bool stop_keep_actors_ = false;
   bool natural_end_ = false;                                // the stop time was shown: it ends next tick

@@ -51,6 +51,7 @@ class MemoryLog : public PlaybackLog {
       if (i >= 2) f.poses.push_back({12, MakePose(0, 0, 10.0 + static_cast<double>(i))});
       if (i < 4) f.poses.push_back({15, MakePose(30, 30, 0.5)});
       f.lights.push_back({1, i >= 3 ? msg::TrafficLightColor::LIGHT_GREEN : msg::TrafficLightColor::LIGHT_RED});
+      f.vehicle_lights.push_back({10, i >= 5 ? 3u : 1u});  // the car's lights change at frame 5
       frames_.push_back(f);
     }
   }
@@ -154,8 +155,22 @@ const msg::Pose* PoseOf(const std::vector<msg::CommandBody>& tick, uint32_t id) 
 
 size_t Count(const std::vector<msg::CommandBody>& tick, K kind) {
   size_t n = 0;
-  for (const auto& b : tick) n += b._d() == kind;
+  for (const auto& b : tick) {
+    // set_light_state is counted on its own (LightStates)
+    if (b._d() == K::CMD_ACTOR_PHYSICS && b.actor_physics().kind() == msg::ActorPhysicsKind::PHYSICS_SET_LIGHT_STATE) continue;
+    n += b._d() == kind;
+  }
   return n;
+}
+
+std::vector<uint32_t> LightStates(const std::vector<msg::CommandBody>& tick) {
+  std::vector<uint32_t> out;
+  for (const auto& b : tick) {
+    if (b._d() == K::CMD_ACTOR_PHYSICS && b.actor_physics().kind() == msg::ActorPhysicsKind::PHYSICS_SET_LIGHT_STATE) {
+      out.push_back(b.actor_physics().light_state());
+    }
+  }
+  return out;
 }
 
 TEST(Playback, ReplyIsCarlasText) {
@@ -215,6 +230,10 @@ TEST(Playback, EveryTickPutsEveryActorAtItsRecordedPose) {
     if (frame == 4) {
       EXPECT_EQ(Count(tick, K::CMD_DESTROY_ACTOR), 1u);
     }
+    // The car's lights are set when they change.
+    EXPECT_EQ(LightStates(tick), frame == 0 ? std::vector<uint32_t>{1} : frame == 5 ? std::vector<uint32_t>{3}
+                                                                                    : std::vector<uint32_t>{})
+        << frame;
     // Light 1 is set (frozen) when it changes, not every tick.
     EXPECT_EQ(Count(tick, K::CMD_TRAFFIC_LIGHT), frame == 0 || frame == 3 ? 1u : 0u) << frame;
     for (const auto& rec : log.Frame(frame).poses) {

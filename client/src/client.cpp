@@ -1118,6 +1118,58 @@ void Client::destroy(uint32_t actor) {
   impl_->RemoveActor(actor);
 }
 
+namespace {
+
+msg::CommandBody RecorderBody(msg::RecorderAction action, const std::string& name = "", bool flag = false) {
+  msg::RecorderCommand r;
+  r.action(action);
+  r.name(name);
+  r.flag(flag);
+  msg::CommandBody b;
+  b.recorder(r);
+  return b;
+}
+
+}  // namespace
+
+std::string Client::start_recorder(const std::string& name, bool additional_data) {
+  if (name.empty()) throw ClientError("start_recorder needs a file name");
+  if (name.size() > 1024) throw ClientError("start_recorder: the file name is longer than 1024 characters");
+  return Submit(RecorderBody(msg::RecorderAction::RECORDER_START, name, additional_data)).text().to_string();
+}
+
+void Client::stop_recorder() { Submit(RecorderBody(msg::RecorderAction::RECORDER_STOP)); }
+
+std::string Client::replay_file(const std::string& name, double start, double duration, uint32_t follow_id,
+                                bool replay_sensors) {
+  if (name.size() > 1024) throw ClientError("replay_file: the file name is longer than 1024 characters");
+  msg::CommandBody b = RecorderBody(msg::RecorderAction::REPLAY_START, name);
+  b.recorder().start(start);
+  b.recorder().duration(duration);
+  b.recorder().follow_id(follow_id);
+  b.recorder().replay_sensors(replay_sensors);
+  const msg::CommandReply r = Submit(std::move(b), false);
+  // CARLA answers a file it cannot replay with its text ("File ... not found on server").
+  if (r.accepted() || !r.text().to_string().empty()) return r.text().to_string();
+  throw CommandRejected("replay_file rejected: " + r.reason().to_string(), r.reason().to_string());
+}
+
+void Client::stop_replayer(bool keep_actors) { Submit(RecorderBody(msg::RecorderAction::REPLAY_STOP, "", keep_actors)); }
+
+void Client::set_replayer_time_factor(double time_factor) {
+  msg::CommandBody b = RecorderBody(msg::RecorderAction::REPLAY_TIME_FACTOR);
+  b.recorder().value(time_factor);
+  Submit(std::move(b));
+}
+
+void Client::set_replayer_ignore_hero(bool ignore_hero) {
+  Submit(RecorderBody(msg::RecorderAction::REPLAY_IGNORE_HERO, "", ignore_hero));
+}
+
+void Client::set_replayer_ignore_spectator(bool ignore_spectator) {
+  Submit(RecorderBody(msg::RecorderAction::REPLAY_IGNORE_SPECTATOR, "", ignore_spectator));
+}
+
 BlueprintLibrary Client::blueprints(double wait_s) const {
   auto& s = *impl_;
   std::unique_lock<std::mutex> lock(s.mu);
@@ -1362,6 +1414,8 @@ const char* CommandKindName(msg::CommandKind kind) {
     case msg::CommandKind::CMD_WALKER_AI: return "walker AI controller command";
     case msg::CommandKind::CMD_PEDESTRIANS: return "set_pedestrians_cross_factor";
     case msg::CommandKind::CMD_DEBUG_DRAW: return "debug draw";
+    case msg::CommandKind::CMD_RECORDER: return "recorder command";
+    case msg::CommandKind::CMD_V2X_SEND: return "V2X send";
   }
   return "command";
 }

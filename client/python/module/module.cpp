@@ -15,6 +15,7 @@
 #include "gil.h"
 #include "map_queries.h"
 #include "ray_queries.h"
+#include "recorder.h"
 #include "lockstep/client/client.h"
 #include "lockstep/client/multirotor.h"
 #include "lockstep/map/map.h"
@@ -421,6 +422,7 @@ PYBIND11_MODULE(_lockstep, m) {
   py::class_<map::Map, std::shared_ptr<map::Map>> map_class(m, "Map");
   python::AddMapQueries(map_class);
   python::AddRayQueries(m);
+  python::RegisterRecorder(m);
   map_class.def_property_readonly("name", &map::Map::Name)
       .def(
           "waypoint",
@@ -581,6 +583,16 @@ PYBIND11_MODULE(_lockstep, m) {
           py::arg("blueprint"), py::arg("transform"), py::arg("attributes") = std::map<std::string, std::string>{},
           py::arg("parent") = 0)
       .def("destroy", &Client::destroy, py::call_guard<python::ReleaseGil>())
+      // CARLA's recorder calls (lockstep/client/client.h)
+      .def("start_recorder", &Client::start_recorder, py::arg("name"), py::arg("additional_data") = false,
+           py::call_guard<python::ReleaseGil>())
+      .def("stop_recorder", &Client::stop_recorder, py::call_guard<python::ReleaseGil>())
+      .def("replay_file", &Client::replay_file, py::arg("name"), py::arg("start") = 0.0, py::arg("duration") = 0.0,
+           py::arg("follow_id") = 0, py::arg("replay_sensors") = false, py::call_guard<python::ReleaseGil>())
+      .def("stop_replayer", &Client::stop_replayer, py::arg("keep_actors"), py::call_guard<python::ReleaseGil>())
+      .def("set_replayer_time_factor", &Client::set_replayer_time_factor, py::call_guard<python::ReleaseGil>())
+      .def("set_replayer_ignore_hero", &Client::set_replayer_ignore_hero, py::call_guard<python::ReleaseGil>())
+      .def("set_replayer_ignore_spectator", &Client::set_replayer_ignore_spectator, py::call_guard<python::ReleaseGil>())
       .def("blueprints",
            [](const Client& c, double wait) {
              BlueprintLibrary lib;

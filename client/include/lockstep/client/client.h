@@ -205,6 +205,23 @@ class Client {
   // controller.ai.walker: start, stop, go_to_location, set_max_speed (WalkerAICommand.kind).
   void walker_ai(const msg::WalkerAICommand& command);
 
+  // --- the recorder (CARLA's Client.start_recorder family; docs/compatibility.md) ---
+  // Records from the tick that carries the command into `name` (a name without '/', '\\'
+  // or ':' goes into the recordings folder, as CARLA's Saved folder); returns the file's
+  // path, as CARLA's start_recorder does. additional_data: CARLA's flag.
+  std::string start_recorder(const std::string& name, bool additional_data = false);
+  void stop_recorder();
+  // CARLA's replay_file: the coordinator plays the log back (actors follow their recorded
+  // states) from `start` s (< 0: from the end) for `duration` s (<= 0: to the end).
+  // Returns CARLA's text, also for a file it cannot replay; throws CommandRejected for a
+  // bad value.
+  std::string replay_file(const std::string& name, double start = 0, double duration = 0, uint32_t follow_id = 0,
+                          bool replay_sensors = false);
+  void stop_replayer(bool keep_actors);
+  void set_replayer_time_factor(double time_factor);
+  void set_replayer_ignore_hero(bool ignore_hero);
+  void set_replayer_ignore_spectator(bool ignore_spectator);
+
   // --- what exists ---
   // The union of the services' blueprint declarations (lockstep/blueprints); waits up
   // to `wait_s` for the first declarations.

@@ -287,7 +287,7 @@ class _Shared:
         self.statics = None     # the town's static objects: name -> (mesh instance id, tag, centre ENU)
         self.static_names = {}  # mesh instance id -> name
         self.detection = {}     # (actor, camera, image_type) -> {'filters': [...], 'radius_cm': ...}
-        self.recording = False
+        self.recording = None      # {'folder', 'log'} while startRecording runs
         self.weather_enabled = False
         self.time_of_day = None
         self.spawned_objects = {}  # name -> actor id (simSpawnObject)
@@ -332,9 +332,40 @@ class _Shared:
                 self.client.apply_settings({'real_time_factor': s.clock_speed})
             if any(s.wind) and self.drones():
                 self.mc.set_wind(s.wind)
+        if s.recording.enabled and self.recording is None:
+            self.start_recording()  # settings.json Recording.Enabled: AirSim records from the start
 
     def drones(self):
         return [a for a in self.client.actors() if a['kind'] == 'drone']
+
+    # --- recording (AirSim's startRecording / settings.json Recording) ---
+    def start_recording(self):
+        with self.lock:
+            if self.recording is not None:
+                self.stop_recording()  # AirSim's startRecording stops a recording in course first
+            rec = self.load_settings().recording
+            base = os.path.expanduser(rec.folder) if rec.folder else os.path.join(os.path.expanduser('~'), 'Documents',
+                                                                                     'AirSim')
+            # AirSim's folder name: the wall-clock time the recording starts (FileSystem::getLogFolderPath).
+            folder = os.path.join(os.path.abspath(base), time.strftime('%Y-%m-%d-%H-%M-%S'))
+            os.makedirs(folder, exist_ok=True)
+            path = self.client.start_recorder(os.path.join(folder, 'airsim_rec.log'))
+            self.recording = {'folder': folder, 'log': path}
+            log.info('airsim: recording to %s', folder)
+
+    def stop_recording(self):
+        with self.lock:
+            rec, self.recording = self.recording, None
+            if rec is None:
+                return  # AirSim: stopping with no recording is logged and ignored
+            self.client.stop_recorder()
+            settings = self.load_settings().recording
+            try:
+                from lockstep import _lockstep
+                _lockstep.write_airsim_record(rec['log'], os.path.join(rec['folder'], 'airsim_rec.txt'),
+                                              settings.record_interval, settings.record_on_move)
+            except (lockstep.ClientError, RuntimeError) as e:  # a log the recorder could not write
+                log.warning('airsim: airsim_rec.txt not written: %s', e)
 
     # --- the player start: where AirSim's vehicles start ---
     def start(self):
@@ -1488,14 +1519,18 @@ class VehicleClient:
         self._mc.cancel(vehicle_name)
 
     def startRecording(self):
-        _unsupported('startRecording', "recording is the recorder service of the launch config (every frame's "
-                     "world state to CSV)")
+        """AirSim's: records into <Recording.Folder, else ~/Documents/AirSim>/<YYYY-MM-DD-HH-MM-SS>/.
+        Lockstep's recorder writes the run's log there (airsim_rec.log: every frame's world
+        state); stopRecording writes AirSim's airsim_rec.txt beside it from the log (docs/
+        compatibility.md: no image files)."""
+        self._s.start_recording()
 
     def stopRecording(self):
-        _unsupported('stopRecording', 'recording is the recorder service of the launch config')
+        self._s.stop_recording()
 
     def isRecording(self):
-        return any(m[1] == 'recorder' and m[2] for m in (self._client.run_status() or {}).get('members', []))
+        """AirSim's: True between startRecording and stopRecording (of this process's clients)."""
+        return self._s.recording is not None
 
     def simSetWind(self, wind):
         """One wind (m/s, world NED) for every drone, from the next tick."""

@@ -59,6 +59,8 @@ _SENSOR_AIRSIM = {'DrawDebugPoints', 'ExternalController', 'GenerateNoise', 'Min
                   'EphMin3d', 'EphMin2d', 'NoiseSigma', 'ScaleFactor', 'NoiseBias', 'DynamicsFrequency',
                   'AngularRandomWalk', 'TauGyroBias', 'GyroBiasStability', 'VelocityRandomWalk', 'TauAccelBias',
                   'AccelBiasStability', 'Mean', 'Stddev'}
+_RECORDING_USED = {'RecordOnMove', 'RecordInterval', 'Folder', 'Enabled', 'Cameras'}
+_RECORDING_CAMERA_USED = {'CameraName', 'ImageType', 'PixelsAsFloat', 'VehicleName', 'Compress'}
 _GEO_USED = {'Latitude', 'Longitude', 'Altitude'}
 _VEC_USED = {'X', 'Y', 'Z'}
 
@@ -110,6 +112,20 @@ class SensorSetting:
         return SENSOR_TYPES[self.sensor_type]
 
 
+class RecordingSetting:
+    """settings.json's Recording block, AirSim's defaults (RecordingSetting in AirSimSettings.hpp).
+    Lockstep records with its recorder (docs/compatibility.md): `cameras` are read and checked
+    but no image files are written."""
+
+    def __init__(self):
+        self.record_on_move = False
+        self.record_interval = 0.05   # s
+        self.folder = ''              # '' = AirSim's ~/Documents/AirSim
+        self.enabled = False
+        self.cameras = [{'camera_name': '0', 'image_type': 0, 'pixels_as_float': False, 'vehicle_name': '',
+                         'compress': True}]
+
+
 class VehicleSetting:
     def __init__(self, name, vehicle_type='SimpleFlight'):
         self.name, self.vehicle_type = name, vehicle_type
@@ -140,7 +156,7 @@ class Settings:
         self.camera_defaults = CameraSetting('CameraDefaults')
         self.wind = (0.0, 0.0, 0.0)             # m/s, world NED
         self.origin_geopoint = None             # (lat deg, lon deg, alt m) or None: the map's
-        self.recording = None
+        self.recording = RecordingSetting()
         self.warnings = []
 
     def default_vehicle(self):
@@ -264,6 +280,33 @@ class _Reader:
             p['max_distance'] = self.number(obj, 'MaxDistance', where, 40.0, 0.01, 1e4)
         return s
 
+    def recording(self, obj):
+        self.keys(obj, 'Recording', _RECORDING_USED, set())
+        rec = RecordingSetting()
+        rec.record_on_move = self.boolean(obj, 'RecordOnMove', 'Recording', rec.record_on_move)
+        rec.record_interval = self.number(obj, 'RecordInterval', 'Recording', rec.record_interval, 0, 3600)
+        rec.folder = self.string(obj, 'Folder', 'Recording', rec.folder)
+        rec.enabled = self.boolean(obj, 'Enabled', 'Recording', rec.enabled)
+        if 'Cameras' in obj:
+            cams = obj['Cameras']
+            if not isinstance(cams, list):
+                self.fail('Recording.Cameras', 'expected a list of cameras, got %s' % type(cams).__name__)
+            rec.cameras = []
+            for i, c in enumerate(cams):
+                w = 'Recording.Cameras[%d]' % i
+                self.keys(c, w, _RECORDING_CAMERA_USED, set())
+                name = c.get('CameraName', '0')
+                if isinstance(name, int) and not isinstance(name, bool):
+                    name = str(name)  # AirSim takes a camera number too
+                if not isinstance(name, str):
+                    self.fail(w + '.CameraName', 'expected a string, got %r' % (name,))
+                rec.cameras.append({'camera_name': name,
+                                    'image_type': self.number(c, 'ImageType', w, 0, 0, 9, integer=True),
+                                    'pixels_as_float': self.boolean(c, 'PixelsAsFloat', w, False),
+                                    'vehicle_name': self.string(c, 'VehicleName', w, ''),
+                                    'compress': self.boolean(c, 'Compress', w, True)})
+        return rec
+
     def vehicle(self, obj, where, name, sim_mode):
         self.keys(obj, where, _VEHICLE_USED, _VEHICLE_AIRSIM)
         default_type = 'PhysXCar' if sim_mode == 'Car' else 'SimpleFlight'
@@ -305,9 +348,7 @@ def parse(text, path='settings.json'):
     s.clock_type = r.string(obj, 'ClockType', '', '', ('', 'ScalableClock', 'SteppableClock'))
     s.view_mode = r.string(obj, 'ViewMode', '', '')
     if 'Recording' in obj:
-        if not isinstance(obj['Recording'], dict):
-            r.fail('Recording', 'expected an object')
-        s.recording = obj['Recording']
+        s.recording = r.recording(obj['Recording'])
     if 'Wind' in obj:
         r.keys(obj['Wind'], 'Wind', _VEC_USED, set())
         s.wind = tuple(r.number(obj['Wind'], k, 'Wind', 0.0, -200, 200) for k in ('X', 'Y', 'Z'))

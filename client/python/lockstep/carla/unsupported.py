@@ -5,7 +5,6 @@ from .errors import add_unsupported
 from .map import Map
 from .world import Client, TrafficManager, World
 
-_NO_RECORDER = 'recording is the recorder service of the launch config (CSV of every frame)'
 _NO_SCENE = 'the static scene (Unreal objects) is not on the wire'
 
 add_unsupported(Vehicle, {
@@ -38,11 +37,5 @@ add_unsupported(Client, {
     'set_files_base_folder': 'there are no server-side asset files',
     'get_required_files': 'there are no server-side asset files',
     'request_file': 'there are no server-side asset files',
-    'show_recorder_collisions': _NO_RECORDER,
-    'show_recorder_actors_blocked': _NO_RECORDER,
-    'set_replayer_time_factor': _NO_RECORDER,
-    'set_replayer_ignore_hero': _NO_RECORDER,
-    'set_replayer_ignore_spectator': _NO_RECORDER,
-    'stop_replayer': _NO_RECORDER,
 })
 add_unsupported(TrafficLight, {'get_light_boxes': 'the light meshes are not in the client'})

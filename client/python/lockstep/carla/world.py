@@ -390,18 +390,60 @@ class Client:
     def apply_batch_sync(self, commands, due_tick_cue=False):
         return self._run(commands, due_tick_cue)
 
-    def start_recorder(self, filename, additional_data=False):
-        unsupported('Client.start_recorder', "add the recorder service to the launch config (it writes every frame's "
-                    'world state to CSV)')
+    # --- CARLA's recorder (docs/compatibility.md, "Recorder") ---
+    def start_recorder(self, name, additional_data=False):
+        """CARLA's: records the run from the next tick into `name` (a name without '/', '\\'
+        or ':' goes into the recordings folder: $LOCKSTEP_RECORDINGS_DIR, else
+        ~/.local/share/lockstep/recordings); returns the file's path, as CARLA's does."""
+        return self._client().start_recorder(str(name), bool(additional_data))
 
     def stop_recorder(self):
-        unsupported('Client.stop_recorder', 'the recorder is a service of the launch config')
+        self._client().stop_recorder()
 
-    def replay_file(self, *args, **kwargs):
-        unsupported('Client.replay_file', 'replays are tick-log replays of a service, not a client call')
+    def replay_file(self, name, time_start=0.0, duration=0.0, follow_id=0, replay_sensors=False, follow_offset=None,
+                    map_override=''):
+        """CARLA's: the simulation plays the log back from `time_start` s (< 0: from the end)
+        for `duration` s (0: to the end); recorded actors are spawned and follow their recorded
+        poses, physics off, from the next tick. Returns CARLA's text. follow_id and
+        follow_offset move CARLA's spectator camera, which Lockstep does not have;
+        map_override is loaded first, as CARLA does (the log must have been recorded on it)."""
+        if map_override and self.get_world().get_map().name != os.path.splitext(os.path.basename(map_override))[0]:
+            self.load_world(map_override, reset_settings=False)
+        return self._client().replay_file(str(name), float(time_start), float(duration), int(follow_id),
+                                          bool(replay_sensors))
 
-    def show_recorder_file_info(self, *args, **kwargs):
-        unsupported('Client.show_recorder_file_info', 'the recorder writes CSV files; read them directly')
+    def stop_replayer(self, keep_actors):
+        self._client().stop_replayer(bool(keep_actors))
+
+    def set_replayer_time_factor(self, time_factor=1.0):
+        self._client().set_replayer_time_factor(float(time_factor))
+
+    def set_replayer_ignore_hero(self, ignore_hero):
+        self._client().set_replayer_ignore_hero(bool(ignore_hero))
+
+    def set_replayer_ignore_spectator(self, ignore_spectator):
+        self._client().set_replayer_ignore_spectator(bool(ignore_spectator))
+
+    def show_recorder_file_info(self, name, show_all=False):
+        """CARLA's text of the log's header, frames and events (read here, not on a server)."""
+        return _lockstep_native().recorder_file_info(str(name), bool(show_all))
+
+    def show_recorder_collisions(self, name, type1, type2):
+        """CARLA's table of the log's collisions between actors of the two types ('a' any, 'h'
+        hero, 'v' vehicle, 'w' walker, 't' traffic light, 'o' other)."""
+        for t in (type1, type2):
+            if not isinstance(t, str) or len(t) != 1:
+                raise ValueError('show_recorder_collisions: a type is one character (a, h, v, w, t, o), got %r' % (t,))
+        return _lockstep_native().recorder_collisions(str(name), type1, type2)
+
+    def show_recorder_actors_blocked(self, name, min_time, min_distance):
+        """CARLA's table of actors that moved less than `min_distance` cm in `min_time` s."""
+        return _lockstep_native().recorder_actors_blocked(str(name), float(min_time), float(min_distance))
+
+
+def _lockstep_native():
+    from lockstep import _lockstep
+    return _lockstep
 
 
 class _Spectator:

@@ -29,7 +29,7 @@ import numpy as np
 
 from . import episodes as episodes_mod
 from . import runner
-from .route import RouteProgress
+from .route import RouteProgress, command
 from .spaces import Box, Dict, Discrete
 
 REWARD_WEIGHTS = {'distance': 1000.0, 'speed': 0.05, 'collision': -0.00002, 'sidewalk': -2.0, 'opposite_lane': -2.0}
@@ -143,17 +143,7 @@ class DrivingEnv:
                 'collision_damage': self.damage, 'offroad': off, 'otherlane': other}
 
     def _command(self):
-        # CIL's command: a turn of the route in the next 20 m, a junction straight ahead, or follow the lane.
-        m = self.m
-        turn = _wrap_deg(self.progress.heading_ahead(20.0) - self.progress.heading_ahead(0.0))
-        if turn > 45:
-            return 2   # right: CARLA's yaw grows clockwise
-        if turn < -45:
-            return 1
-        ahead = self.progress.heading_ahead(10.0)
-        wp = self.ctx.map.get_waypoint(self.ctx.carla.Location(m['x'] + 10 * math.cos(math.radians(ahead)),
-                                                               m['y'] + 10 * math.sin(math.radians(ahead)), 0.0))
-        return 3 if wp is not None and wp.is_junction else 0
+        return command(self.progress, self.ctx.map, self.m['x'], self.m['y'], self.ctx.carla.Location)
 
     def _obs(self):
         m = self.m

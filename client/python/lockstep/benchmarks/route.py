@@ -41,3 +41,24 @@ class RouteProgress:
             k += 1
         (ax, ay), (bx, by) = self.pts[k], self.pts[k + 1]
         return math.degrees(math.atan2(by - ay, bx - ax))
+
+
+FOLLOW_LANE, LEFT, RIGHT, STRAIGHT = 0, 1, 2, 3   # CIL's high-level commands, in this order
+
+
+def _wrap_deg(a):
+    return (a + 180.0) % 360.0 - 180.0
+
+
+def command(progress, carla_map, x, y, location_type):
+    """CIL's high-level command at a car position: a turn of the route within the next
+    20 m (left / right), a junction straight ahead within 10 m (straight), else follow the
+    lane. `location_type` is carla.Location (kept out of this module's imports)."""
+    turn = _wrap_deg(progress.heading_ahead(20.0) - progress.heading_ahead(0.0))
+    if turn > 45:
+        return RIGHT    # CARLA's yaw grows clockwise
+    if turn < -45:
+        return LEFT
+    ahead = math.radians(progress.heading_ahead(10.0))
+    wp = carla_map.get_waypoint(location_type(x + 10 * math.cos(ahead), y + 10 * math.sin(ahead), 0.0))
+    return STRAIGHT if wp is not None and wp.is_junction else FOLLOW_LANE

@@ -4,6 +4,7 @@
 // of a re-simulation, which must not overwrite the log it replays).
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 
@@ -34,7 +35,9 @@ int main(int argc, char** argv) {
   return lockstep::RunServiceMain(argc, argv, "recorder", true, [&](lockstep::ServiceContext& ctx) {
     lockstep::RecorderOptions o = options;
     o.output_dir = ctx.config.output_dir;
-    o.config_source = ctx.config.source;
+    std::error_code ec;
+    const auto source = std::filesystem::absolute(ctx.config.source, ec);
+    o.config_source = ec ? ctx.config.source : source.lexically_normal().string();
     if (std::ifstream in(ctx.config.source); in) {
       std::stringstream text;
       text << in.rdbuf();

@@ -90,17 +90,30 @@ struct Recorder::Hashes {
                     }),
         ack_reader(bus, topics::kAck, [this](const msg::Ack& a, const SampleInfo&) {
           if (a.run() != run) return;
-          std::lock_guard<std::mutex> lock(mu);
-          acks[a.frame()][a.service().to_string()] = a.state_hash();
-          while (acks.size() > 64) acks.erase(acks.begin());
+          {
+            std::lock_guard<std::mutex> lock(mu);
+            acks[a.frame()][a.service().to_string()] = a.state_hash();
+            while (acks.size() > 64) acks.erase(acks.begin());
+          }
+          cv.notify_all();
         }) {}
 
   // A new run: what was kept belongs to the one before.
-  void NewRun(uint32_t r) {
+  void NewRun(uint32_t r, size_t required) {
     std::lock_guard<std::mutex> lock(mu);
     done.clear();
     acks.clear();
     run = r;
+    expected = required;
+  }
+  size_t expected = 0;  // acks per frame: the required services
+
+  // FrameDone of `frame` is here with every required service's ack (an ack may reach this
+  // reader after FrameDone reached the other: different writers).
+  bool Complete(uint64_t frame) const {
+    if (!done.count(frame)) return false;
+    auto a = acks.find(frame);
+    return a != acks.end() && a->second.size() >= expected;
   }
   // Recording starts at `frame`: the hashes of earlier frames are not the log's.
   void StartAt(uint64_t frame) {
@@ -111,7 +124,7 @@ struct Recorder::Hashes {
   // Waits (bounded) for FrameDone of `frame`: it comes after the recorder acked it.
   void WaitDone(uint64_t frame, Ms timeout) {
     std::unique_lock<std::mutex> lock(mu);
-    cv.wait_for(lock, timeout, [&] { return done.count(frame) > 0; });
+    cv.wait_for(lock, timeout, [&] { return Complete(frame); });
   }
 
   // The hashes of the frames before `before` that FrameDone completed, with the acks.
@@ -182,7 +195,7 @@ std::string Recorder::recording() const { return writer_ ? writer_->path() : std
 
 void Recorder::BeginRun(const msg::WorldInfo& world) {
   Stop("run ended");
-  hashes_->NewRun(world.run());
+  hashes_->NewRun(world.run(), world.required_services().size());
   world_ = world;
   mode_ = world.settings().perception_mode();
   alive_.clear();
@@ -357,6 +370,7 @@ void Recorder::WriteFrame(const msg::Tick& tick) {
   }
   // The frame before is done (its FrameDone came before this tick, on another topic).
   if (writer_->frames() > 0) hashes_->WaitDone(tick.frame() - 1, Ms(1000));
+  const auto t0 = std::chrono::steady_clock::now();
   recorder::FrameInputs f;
   f.tick = &tick;
   f.state_frame = state_frame;
@@ -364,14 +378,15 @@ void Recorder::WriteFrame(const msg::Tick& tick) {
   for (const auto& a : air) f.air.push_back(&a);
   for (const auto& e : events) f.events.push_back(&e);
   f.hashes = hashes_->Take(tick.frame());
-  std::map<uint32_t, msg::SpawnActor> listed;
-  {
-    std::lock_guard<std::mutex> lock(in.mu);
-    listed = in.listed;
-  }
+  // Only actors new in the frame are described: look them up then (no copy per frame).
+  std::optional<msg::SpawnActor> listed_spawn;
   auto spawn_of = [&](uint32_t id) -> const msg::SpawnActor* {
     if (auto it = alive_.find(id); it != alive_.end()) return &it->second;
-    if (auto it = listed.find(id); it != listed.end()) return &it->second;
+    std::lock_guard<std::mutex> lock(in.mu);
+    if (auto it = in.listed.find(id); it != in.listed.end()) {
+      listed_spawn = it->second;
+      return &*listed_spawn;
+    }
     return nullptr;
   };
   auto kind_of = [&](const std::string& blueprint) {
@@ -398,6 +413,8 @@ void Recorder::WriteFrame(const msg::Tick& tick) {
     return a;
   };
   writer_->WriteFrame(f);
+  ++frames_written_;
+  write_us_ = write_us_ + std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
 }
 
 }  // namespace lockstep

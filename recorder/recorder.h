@@ -44,6 +44,9 @@ class Recorder final : public ServiceCore {
 
   // The log being written ("" when not recording), for tests and status.
   std::string recording() const;
+  // Frames written and the wall time spent writing them (after their inputs arrived), us.
+  uint64_t frames_written() const { return frames_written_; }
+  double write_us() const { return write_us_; }
 
  private:
   struct Inputs;
@@ -69,6 +72,8 @@ class Recorder final : public ServiceCore {
   uint64_t prelude_frames_ = 0;
   double last_dt_ = -1;
   uint64_t last_frame_ = 0;
+  std::atomic<uint64_t> frames_written_{0};
+  std::atomic<double> write_us_{0};
   mutable std::mutex announce_mu_;
   std::map<std::string, std::pair<std::string, bool>> announced_;  // name -> (kind, perception)
   Reader<msg::ServiceAnnounce> announce_reader_;

@@ -5,15 +5,15 @@
 //   - tick cost with and without recording, side by side in one run: blocks of ticks that
 //     alternate not recording / recording (start_recorder and stop_recorder between them),
 //     the barrier time per tick (publishing the tick to its last ack) compared block by block;
-//   - MB per simulated hour of the logs written (goal: at most 100 MB/h, half of CARLA's
-//     about 200 MB/h for about 150 actors);
-//   - re-simulation speed: the last log's ticks re-drive fresh services (x real time), with
-//     every world hash compared;
+//   - MB per simulated hour of a long log recorded after the blocks (goal: at most 100 MB/h,
+//     half of CARLA's about 200 MB/h for about 150 actors);
+//   - re-simulation speed: that log's ticks (with the run's earlier ticks it carries)
+//     re-drive fresh services from frame 1 (x real time), every world hash compared;
 //   - playback speed: carla.Client.replay_file (the client side's playback) reports it; not
 //     measured here yet (null).
 // JSON lines; the last one is the summary.
 //
-//   bench_recorder [--vehicles N] [--walkers N] [--block N] [--blocks N] [--seed N]
+//   bench_recorder [--vehicles N] [--walkers N] [--block N] [--blocks N] [--long N] [--seed N] [--keep 1]
 #include <unistd.h>
 
 #include <algorithm>
@@ -43,8 +43,9 @@ using namespace lockstep;
 
 struct Options {
   std::string map = std::string(LOCKSTEP_CARLA_MAPS_DIR) + "/Town01.xodr";
-  int vehicles = 100, walkers = 50, block = 100, blocks = 6, warmup = 60;
+  int vehicles = 100, walkers = 50, block = 50, blocks = 10, warmup = 60, long_block = 400;
   uint64_t seed = 2017;
+  bool keep = false;  // --keep 1: leave the logs in /tmp
 };
 
 ScheduledCommand Step(uint64_t frame, msg::CommandBody body, const std::string& alias = "", const std::string& actor_alias = "") {
@@ -129,13 +130,27 @@ LaunchConfig Config(const Options& o, const std::string& dir, uint64_t ticks) {
     e.recorder(s);
     c.scenario.push_back(Step(start + static_cast<uint64_t>(o.block), e));
   }
+  // Then one long recording (the log size per hour and the re-simulation).
+  {
+    msg::RecorderCommand r;
+    r.action(msg::RecorderAction::RECORDER_START);
+    r.name(dir + "/long.lslog");
+    msg::CommandBody b;
+    b.recorder(r);
+    c.scenario.push_back(Step(static_cast<uint64_t>(o.warmup + o.blocks * o.block) + 1, b));
+  }
   std::stable_sort(c.scenario.begin(), c.scenario.end(), [](const auto& a, const auto& b) { return a.frame < b.frame; });
   return c;
 }
 
-// Runs the services' cores and the coordinator on one in-process bus. Returns the
-// coordinator's barrier time per completed tick (us).
-std::vector<double> Run(const LaunchConfig& c, bool read_only, const std::function<void(Bus&)>& watch = {}) {
+struct RunResult {
+  std::vector<double> barrier_us;  // per completed tick
+  uint64_t frames_written = 0;     // by the recorder
+  double write_us = 0;             // the recorder's time writing them (inputs at hand)
+};
+
+// Runs the services' cores and the coordinator on one in-process bus.
+RunResult Run(const LaunchConfig& c, bool read_only, const std::function<void(Bus&)>& watch = {}) {
   auto bus = CreateInProcessBus();
   if (watch) watch(*bus);
   Coordinator coordinator(*bus, c);
@@ -155,7 +170,7 @@ std::vector<double> Run(const LaunchConfig& c, bool read_only, const std::functi
   ta.join();
   tg.join();
   tr.join();
-  return coordinator.stats().barrier_us;
+  return RunResult{coordinator.stats().barrier_us, recorder.frames_written(), recorder.write_us()};
 }
 
 double Median(std::vector<double> v) {
@@ -175,7 +190,9 @@ int main(int argc, char** argv) {
     else if (k == "--walkers") o.walkers = std::atoi(v);
     else if (k == "--block") o.block = std::atoi(v);
     else if (k == "--blocks") o.blocks = std::atoi(v);
+    else if (k == "--long") o.long_block = std::atoi(v);
     else if (k == "--seed") o.seed = std::strtoull(v, nullptr, 10);
+    else if (k == "--keep") o.keep = std::atoi(v) != 0;
     else {
       std::fprintf(stderr, "bench_recorder: unknown option %s\n", k.c_str());
       return 2;
@@ -187,10 +204,11 @@ int main(int argc, char** argv) {
   const std::string dir = (std::filesystem::temp_directory_path() / ("lockstep-bench-recorder-" + std::to_string(getpid()))).string();
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
-  const uint64_t ticks = static_cast<uint64_t>(o.warmup + o.blocks * o.block);
+  const uint64_t ticks = static_cast<uint64_t>(o.warmup + o.blocks * o.block + o.long_block);
   const LaunchConfig c = Config(o, dir, ticks);
   const auto t0 = std::chrono::steady_clock::now();
-  const std::vector<double> barrier = Run(c, false);
+  const RunResult run = Run(c, false);
+  const std::vector<double>& barrier = run.barrier_us;
   const double run_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   // Block by block: median barrier time of the plain blocks and of the recording ones.
   std::vector<double> plain, recording;
@@ -204,21 +222,24 @@ int main(int argc, char** argv) {
     (k % 2 ? recording : plain).push_back(m);
     std::printf("{\"block\":%d,\"recording\":%s,\"ticks\":%zu,\"median_tick_us\":%.1f}\n", k, k % 2 ? "true" : "false", b.size(), m);
   }
-  const double plain_us = std::accumulate(plain.begin(), plain.end(), 0.0) / static_cast<double>(plain.size());
-  const double rec_us = std::accumulate(recording.begin(), recording.end(), 0.0) / static_cast<double>(recording.size());
+  const double plain_us = Median(plain);
+  const double rec_us = Median(recording);
+  const double write_us = run.frames_written ? run.write_us / static_cast<double>(run.frames_written) : 0;
   // Log sizes per simulated hour.
-  uint64_t bytes = 0;
-  double sim_s = 0;
-  std::string last_log;
-  for (const auto& e : std::filesystem::directory_iterator(dir)) {
-    recorder::LogReader log(e.path().string());
-    bytes += log.file_size();
-    sim_s += log.duration() + log.header().world.settings().fixed_delta_seconds();
-    if (last_log.empty() || e.path().string() > last_log) last_log = e.path().string();
+  // The long log: its frames and footer per simulated hour (the header is once per log).
+  const std::string last_log = dir + "/long.lslog";
+  double mb_per_hour = 0;
+  {
+    recorder::LogReader log(last_log);
+    const double sim_s = log.duration() + c.world.fixed_delta_seconds();
+    const uint64_t bytes = log.file_size() - log.header_bytes();
+    mb_per_hour = static_cast<double>(bytes) / 1e6 * 3600 / sim_s;
+    std::printf("{\"log\":\"%s\",\"frames\":%llu,\"frame_and_footer_bytes\":%llu,\"bytes_per_frame\":%.0f,\"header_bytes\":%llu,"
+                "\"mb_per_sim_hour\":%.1f}\n",
+                last_log.c_str(), static_cast<unsigned long long>(log.frame_count()), static_cast<unsigned long long>(bytes),
+                static_cast<double>(bytes) / static_cast<double>(log.frame_count()), static_cast<unsigned long long>(log.header_bytes()),
+                mb_per_hour);
   }
-  const double mb_per_hour = sim_s > 0 ? static_cast<double>(bytes) / 1e6 * 3600 / sim_s : 0;
-  std::printf("{\"logs\":\"%s\",\"bytes\":%llu,\"sim_s\":%.2f,\"mb_per_sim_hour\":%.1f}\n", dir.c_str(),
-              static_cast<unsigned long long>(bytes), sim_s, mb_per_hour);
   std::fflush(stdout);
   // Re-simulation of the last log.
   recorder::LogReader log(last_log);
@@ -240,10 +261,12 @@ int main(int argc, char** argv) {
               result.reason.c_str(), resim_s, resim_sim_s / resim_s);
   std::printf("{\"summary\":\"recorder\",\"vehicles\":%d,\"walkers\":%d,\"drones\":2,\"dt\":0.05,\"run_wall_s\":%.1f,"
               "\"median_tick_us_plain\":%.1f,\"median_tick_us_recording\":%.1f,\"tick_cost_ratio\":%.3f,"
+              "\"recorder_write_us_per_frame\":%.1f,\"tick_cost_ratio_from_write_time\":%.3f,"
               "\"mb_per_sim_hour\":%.1f,\"resimulation_x_real_time\":%.2f,\"resimulation_hashes_equal\":%s,"
               "\"playback_x_real_time\":null}\n",
-              o.vehicles, o.walkers, run_s, plain_us, rec_us, plain_us > 0 ? rec_us / plain_us : 0, mb_per_hour, resim_sim_s / resim_s,
+              o.vehicles, o.walkers, run_s, plain_us, rec_us, plain_us > 0 ? rec_us / plain_us : 0, write_us,
+              plain_us > 0 ? (plain_us + write_us) / plain_us : 0, mb_per_hour, resim_sim_s / resim_s,
               result.ok() ? "true" : "false");
-  std::filesystem::remove_all(dir);
+  if (!o.keep) std::filesystem::remove_all(dir);
   return result.ok() ? 0 : 1;
 }

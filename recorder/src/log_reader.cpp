@@ -69,11 +69,15 @@ ActorInfo FromProto(const log::ActorInfo& a) {
   return o;
 }
 
-FrameHashes FromProto(const log::FrameHash& h) {
+FrameHashes FromProto(const log::FrameHash& h, const std::vector<ServiceInfo>& services) {
   FrameHashes o;
   o.world_hash = h.world_hash();
   o.diverged = h.diverged();
   for (const auto& s : h.services()) o.services.emplace_back(s.service(), s.state_hash());
+  for (int i = 0; i < h.service_hashes_size() && i < static_cast<int>(services.size()); ++i) {
+    o.services.emplace_back(services[static_cast<size_t>(i)].name, h.service_hashes(i));
+  }
+  std::sort(o.services.begin(), o.services.end());
   return o;
 }
 
@@ -83,10 +87,14 @@ struct Quantised {
 };
 struct Tracked {
   ActorState state;
-  Quantised q;
+  Quantised q;                    // this frame's value
+  Quantised q1, q2;               // one and two frames before
+  int n = 0;                      // how many of q1, q2 count (the writer's rule)
   bool posed = false;
   bool moved_from_known = false;  // had a pose the frame before (velocity defined)
   Quantised prev;
+  int32_t ctl[3] = {0, 0, 0};     // throttle, steer, brake in 1/1000
+  bool has_ctl = false;
 };
 
 }  // namespace
@@ -102,6 +110,7 @@ struct LogReader::Impl {
   std::vector<uint64_t> keyframes;    // frames, ascending
   std::map<uint64_t, FrameHashes> late_hashes;  // from the footer
   uint64_t first = 0;
+  uint64_t frames_start = 0;  // offset of the first frame record
   bool truncated = true;
   std::string stop_reason;
   std::string scratch;
@@ -150,7 +159,7 @@ struct LogReader::Impl {
     uint64_t next = 0;
     if (!ReadRecord(sizeof kMagic, &r, &next) || !r.has_header()) Fail("no header record (the file is cut short or damaged)");
     ReadHeader(r.header());
-    const uint64_t frames_start = next;
+    frames_start = next;
     // A closed log: the trailer points at the footer with the index.
     if (size >= frames_start + 16) {
       uint8_t trailer[16];
@@ -222,7 +231,7 @@ struct LogReader::Impl {
       a.last_frame = i < f.actor_last_frame_size() ? f.actor_last_frame(i) : first + offsets.size() - 1;
       actors[a.id] = std::move(a);
     }
-    for (const auto& h : f.hashes()) late_hashes[h.frame()] = FromProto(h);
+    for (const auto& h : f.hashes()) late_hashes[h.frame()] = FromProto(h, header.services);
   }
 
   // No footer: every whole record in turn, up to the first one cut short.
@@ -269,6 +278,11 @@ struct LogReader::Impl {
     for (auto& [id, t] : st) {
       t.prev = t.q;
       t.moved_from_known = t.posed;
+      // The prediction (the writer's rule); a listed residual is added below.
+      if (!f.keyframe() && t.n == 1) t.q = t.q1;
+      if (!f.keyframe() && t.n >= 2) {
+        for (int k = 0; k < 6; ++k) t.q.v[k] = 2 * t.q1.v[k] - t.q2.v[k];
+      }
     }
     for (uint32_t d : f.destroyed()) st.erase(d);
     if (f.keyframe()) {
@@ -295,23 +309,44 @@ struct LogReader::Impl {
     }
     const auto& p = f.poses();
     uint32_t id = 0;
-    std::set<uint32_t> in_keyframe;
+    std::set<uint32_t> listed;
     for (int i = 0; i < p.id_delta_size(); ++i) {
       id += p.id_delta(i);
       auto it = st.find(id);
       if (it == st.end()) Fail("frame " + std::to_string(f.frame()) + ": a pose of actor " + std::to_string(id) + ", which it does not list");
       Tracked& t = it->second;
-      const bool absolute = f.keyframe() || !t.posed;
+      const bool absolute = f.keyframe() || t.n == 0;
       const int64_t d[6] = {p.x(i), p.y(i), p.z(i), p.roll(i), p.pitch(i), p.yaw(i)};
       for (int k = 0; k < 6; ++k) t.q.v[k] = absolute ? d[k] : t.q.v[k] + d[k];
       t.posed = true;
+      listed.insert(id);
+    }
+    // The history of every posed actor moves on by a frame.
+    for (auto& [aid, t] : st) {
+      if (!t.posed) continue;
+      if (t.n == 0 && !listed.count(aid)) continue;
+      t.q2 = t.q1;
+      t.q1 = t.q;
+      t.n = f.keyframe() ? 1 : std::min(t.n + 1, 2);
+    }
+    const auto& ctl = f.controls();
+    uint32_t cid = 0;
+    for (int i = 0; i < ctl.id_delta_size(); ++i) {
+      cid += ctl.id_delta(i);
+      auto it = st.find(cid);
+      if (it == st.end()) continue;
+      Tracked& t = it->second;
+      const bool absolute = f.keyframe() || !t.has_ctl;
+      const int32_t d[3] = {ctl.throttle(i), ctl.steer(i), ctl.brake(i)};
+      for (int k = 0; k < 3; ++k) t.ctl[k] = absolute ? d[k] : t.ctl[k] + d[k];
+      t.has_ctl = true;
+      t.state.throttle = static_cast<float>(t.ctl[0] / 1000.0);
+      t.state.steer = static_cast<float>(t.ctl[1] / 1000.0);
+      t.state.brake = static_cast<float>(t.ctl[2] / 1000.0);
     }
     for (const auto& v : f.vehicles()) {
       if (auto it = st.find(v.id()); it != st.end()) {
         auto& s = it->second.state;
-        s.throttle = v.throttle();
-        s.steer = v.steer();
-        s.brake = v.brake();
         s.hand_brake = v.hand_brake();
         s.reverse = v.reverse();
         s.gear = v.gear();
@@ -415,7 +450,7 @@ struct LogReader::Impl {
   std::optional<FrameHashes> HashesOf(uint64_t frame, const log::Frame* next) {
     if (next != nullptr) {
       for (const auto& h : next->hashes()) {
-        if (h.frame() == frame) return FromProto(h);
+        if (h.frame() == frame) return FromProto(h, header.services);
       }
     }
     if (auto it = late_hashes.find(frame); it != late_hashes.end()) return it->second;
@@ -423,7 +458,7 @@ struct LogReader::Impl {
     for (uint64_t k = frame + 2; k <= last() && k <= frame + 8; ++k) {
       const log::Frame later = FrameRecord(k);
       for (const auto& h : later.hashes()) {
-        if (h.frame() == frame) return FromProto(h);
+        if (h.frame() == frame) return FromProto(h, header.services);
       }
     }
     return std::nullopt;
@@ -451,6 +486,7 @@ double LogReader::duration() const {
 bool LogReader::truncated() const { return impl_->truncated; }
 std::string LogReader::stop_reason() const { return impl_->stop_reason; }
 uint64_t LogReader::file_size() const { return impl_->size; }
+uint64_t LogReader::header_bytes() const { return impl_->frames_start; }
 
 double LogReader::SimTime(uint64_t frame) const {
   if (impl_->offsets.empty() || frame < impl_->first || frame > impl_->last()) {

@@ -1,12 +1,16 @@
 #include "lockstep/recorder/log_writer.h"
 
+#include <algorithm>
+#include <array>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <ctime>
 #include <filesystem>
 #include <map>
 #include <set>
+#include <unordered_map>
 
 #include "lockstep_log.pb.h"
 #include "log_format.h"
@@ -34,10 +38,18 @@ Quantised QuantisePose(const msg::Pose& p) {
   return q;
 }
 
-void FillHash(log::FrameHash* out, uint64_t frame, const FrameHashes& h) {
+void FillHash(log::FrameHash* out, uint64_t frame, const FrameHashes& h, const std::vector<std::string>& names) {
   out->set_frame(frame);
   out->set_world_hash(h.world_hash);
   out->set_diverged(h.diverged);
+  // Compact: one fixed64 per header service, when the acks are exactly those services.
+  if (!names.empty() && h.services.size() == names.size()) {
+    std::map<std::string, uint64_t> by(h.services.begin(), h.services.end());
+    if (by.size() == names.size() && std::all_of(names.begin(), names.end(), [&](const std::string& n) { return by.count(n) > 0; })) {
+      for (const auto& n : names) out->add_service_hashes(by[n]);
+      return;
+    }
+  }
   for (const auto& [name, hash] : h.services) {
     auto* s = out->add_services();
     s->set_service(name);
@@ -90,15 +102,22 @@ struct LogWriter::Impl {
   std::vector<uint64_t> offsets;
   std::vector<uint64_t> keyframes;
   std::vector<double> sim_times;
-  // The frame before, for the deltas.
-  std::map<uint32_t, Quantised> poses;
+  // The frames before, for the predictions: value one and two frames before, and how many
+  // of them count (0 new, 1 after a keyframe or its first frame, 2 otherwise).
+  struct History {
+    Quantised q1, q2;
+    int n = 0;
+  };
+  std::unordered_map<uint32_t, History> poses;
+  std::map<uint32_t, std::array<int32_t, 3>> controls;  // vehicle -> throttle, steer, brake in 1/1000
+  std::vector<std::string> service_names;  // the header's services, for the compact hashes
   std::set<uint32_t> present;
-  std::map<uint32_t, std::string> slow;  // serialized slow info by actor
-  std::map<uint32_t, double> light_elapsed;  // predicted elapsed of each light
-  std::map<uint32_t, std::array<uint32_t, 5>> infractions;
+  std::unordered_map<uint32_t, std::string> slow;  // serialized slow info by actor
+  std::unordered_map<uint32_t, double> light_elapsed;  // predicted elapsed of each light
+  std::unordered_map<uint32_t, std::array<uint32_t, 5>> infractions;
   // Every actor of the log, for the footer.
   std::map<uint32_t, log::ActorInfo> actors;
-  std::map<uint32_t, std::pair<uint64_t, uint64_t>> actor_frames;
+  std::unordered_map<uint32_t, std::pair<uint64_t, uint64_t>> actor_frames;
   std::string buffer;
 
   void Write(const log::Record& r) {
@@ -137,6 +156,7 @@ LogWriter::LogWriter(const std::string& path, const LogHeader& header) : impl_(s
   const auto world = ToCdr(header.world);
   h->set_world_info_cdr(world.data(), world.size());
   for (const auto& s : header.services) {
+    impl_->service_names.push_back(s.name);
     auto* o = h->add_services();
     o->set_name(s.name);
     o->set_kind(s.kind);
@@ -201,19 +221,18 @@ void LogWriter::WriteFrame(const FrameInputs& in) {
   struct Entry {
     msg::ActorKind kind;
     const msg::Pose* pose;
-    std::string blueprint;
+    const char* blueprint;  // the state message's (no copy per actor and frame)
     const msg::Vector3* half;
   };
   std::map<uint32_t, Entry> now;
-  std::map<uint32_t, std::string> slow_now;
+  std::unordered_map<uint32_t, std::string> slow_now;
+  slow_now.reserve(m.slow.size() + 16);
+  std::map<uint32_t, std::array<int32_t, 3>> controls_now;
   for (const auto* g : in.ground) {
     for (const auto& v : g->vehicles()) {
-      now[v.actor()] = Entry{msg::ActorKind::ACTOR_VEHICLE, &v.transform(), v.blueprint().to_string(), &v.half_extents()};
+      now[v.actor()] = Entry{msg::ActorKind::ACTOR_VEHICLE, &v.transform(), v.blueprint().c_str(), &v.half_extents()};
       log::VehicleInfo vi;
       vi.set_id(v.actor());
-      vi.set_throttle(v.control().throttle());
-      vi.set_steer(v.control().steer());
-      vi.set_brake(v.control().brake());
       vi.set_hand_brake(v.control().hand_brake());
       vi.set_reverse(v.control().reverse());
       vi.set_gear(v.gear());
@@ -222,6 +241,9 @@ void LogWriter::WriteFrame(const FrameInputs& in) {
       std::string s = vi.SerializeAsString();
       if (keyframe || m.slow.count(v.actor()) == 0 || m.slow[v.actor()] != s) *f->add_vehicles() = vi;
       slow_now[v.actor()] = std::move(s);
+      controls_now[v.actor()] = {static_cast<int32_t>(std::lround(v.control().throttle() * 1000.0)),
+                                 static_cast<int32_t>(std::lround(v.control().steer() * 1000.0)),
+                                 static_cast<int32_t>(std::lround(v.control().brake() * 1000.0))};
       // Infractions: the cumulative counters' increments.
       const std::array<uint32_t, 5> counts{v.red_light_infractions(), v.stop_sign_infractions(), v.collision_infractions(),
                                            v.opposite_lane_infractions(), v.offroad_infractions()};
@@ -238,7 +260,7 @@ void LogWriter::WriteFrame(const FrameInputs& in) {
       m.infractions[v.actor()] = counts;
     }
     for (const auto& w : g->walkers()) {
-      now[w.actor()] = Entry{msg::ActorKind::ACTOR_WALKER, &w.transform(), w.blueprint().to_string(), &w.half_extents()};
+      now[w.actor()] = Entry{msg::ActorKind::ACTOR_WALKER, &w.transform(), w.blueprint().c_str(), &w.half_extents()};
       log::WalkerInfo wi;
       wi.set_id(w.actor());
       wi.set_speed(w.control().speed());
@@ -269,7 +291,7 @@ void LogWriter::WriteFrame(const FrameInputs& in) {
   }
   for (const auto* a : in.air) {
     for (const auto& d : a->drones()) {
-      now[d.actor()] = Entry{msg::ActorKind::ACTOR_DRONE, &d.transform(), d.blueprint().to_string(), nullptr};
+      now[d.actor()] = Entry{msg::ActorKind::ACTOR_DRONE, &d.transform(), d.blueprint().c_str(), nullptr};
       log::DroneInfo di;
       di.set_id(d.actor());
       di.set_landed(d.landed() == msg::LandedState::LANDED_LANDED);
@@ -283,17 +305,23 @@ void LogWriter::WriteFrame(const FrameInputs& in) {
     }
   }
 
-  // Poses: absolute in a keyframe, else the change of those that moved (new ones from 0).
+  // Poses: absolute in a keyframe, else the residual from the prediction (the .proto's
+  // rule); an actor exactly where predicted is left out.
   auto* poses = f->mutable_poses();
   uint32_t last_id = 0;
-  std::map<uint32_t, Quantised> poses_now;
+  std::unordered_map<uint32_t, Impl::History> poses_now;
+  poses_now.reserve(now.size());
   for (const auto& [id, e] : now) {
     const Quantised q = QuantisePose(*e.pose);
-    poses_now[id] = q;
     const auto prev = m.poses.find(id);
-    const bool known = prev != m.poses.end();
-    if (!keyframe && known && prev->second == q) continue;
-    const Quantised base = (keyframe || !known) ? Quantised{} : prev->second;
+    const Impl::History h = prev == m.poses.end() ? Impl::History{} : prev->second;
+    Quantised base;
+    if (!keyframe && h.n == 1) base = h.q1;
+    if (!keyframe && h.n >= 2) {
+      for (int k = 0; k < 6; ++k) base.v[k] = 2 * h.q1.v[k] - h.q2.v[k];
+    }
+    poses_now[id] = Impl::History{q, h.q1, keyframe ? 1 : std::min(h.n + 1, 2)};
+    if (!keyframe && h.n > 0 && base == q) continue;
     poses->add_id_delta(id - last_id);
     last_id = id;
     poses->add_x(q.v[0] - base.v[0]);
@@ -302,6 +330,20 @@ void LogWriter::WriteFrame(const FrameInputs& in) {
     poses->add_roll(q.v[3] - base.v[3]);
     poses->add_pitch(q.v[4] - base.v[4]);
     poses->add_yaw(q.v[5] - base.v[5]);
+  }
+  // Pedals and wheel: absolute in a keyframe or for a new vehicle, else the change.
+  auto* controls = f->mutable_controls();
+  last_id = 0;
+  for (const auto& [id, c] : controls_now) {
+    const auto prev = m.controls.find(id);
+    const bool known = prev != m.controls.end() && !keyframe;
+    if (known && prev->second == c) continue;
+    const std::array<int32_t, 3> base = known ? prev->second : std::array<int32_t, 3>{0, 0, 0};
+    controls->add_id_delta(id - last_id);
+    last_id = id;
+    controls->add_throttle(c[0] - base[0]);
+    controls->add_steer(c[1] - base[1]);
+    controls->add_brake(c[2] - base[2]);
   }
 
   // Spawned and destroyed, against the frame before.
@@ -362,7 +404,7 @@ void LogWriter::WriteFrame(const FrameInputs& in) {
       for (const auto& c : l.crossed()) o->add_crossed(static_cast<uint32_t>(c.type()));
     }
   }
-  for (const auto& [frame, h] : in.hashes) FillHash(f->add_hashes(), frame, h);
+  for (const auto& [frame, h] : in.hashes) FillHash(f->add_hashes(), frame, h, m.service_names);
   for (const auto& s : in.sensors) {
     auto* o = f->add_sensors();
     o->set_sensor(s.sensor);
@@ -386,6 +428,7 @@ void LogWriter::WriteFrame(const FrameInputs& in) {
   m.last_sim_time = tick.sim_time();
   ++m.frames;
   m.poses = std::move(poses_now);
+  m.controls = std::move(controls_now);
   m.present = std::move(present);
   m.slow = std::move(slow_now);
   // A running light's elapsed grows by the next tick's dt; the reader predicts it so.
@@ -406,7 +449,7 @@ void LogWriter::Close(const std::string& reason, const std::vector<std::pair<uin
   f->set_duration(m.frames ? m.last_sim_time - m.first_sim_time : 0);
   for (uint64_t o : m.offsets) f->add_offsets(o);
   for (uint64_t k : m.keyframes) f->add_keyframes(k);
-  for (const auto& [frame, h] : late_hashes) FillHash(f->add_hashes(), frame, h);
+  for (const auto& [frame, h] : late_hashes) FillHash(f->add_hashes(), frame, h, m.service_names);
   f->set_stop_reason(reason);
   for (const auto& [id, a] : m.actors) {
     *f->add_actors() = a;

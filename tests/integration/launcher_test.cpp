@@ -102,6 +102,32 @@ TEST(Launcher, RunsTheScenarioAndRecordsEveryFrameDeterministically) {
   EXPECT_EQ(records[0], records[1]) << "same seed, same scenario: byte-identical records";
 }
 
+// Issue 22: the run's log re-drives the real services (processes over DDS) through
+// `lockstep log replay --resimulate`, every frame's world hash equal; a config with
+// another seed is refused with the reason.
+TEST(Launcher, ARecordedRunReSimulatesWithEveryWorldHashEqual) {
+  const std::string out = std::filesystem::temp_directory_path() / ("lockstep-resim-" + std::to_string(getpid()));
+  std::filesystem::remove_all(out);
+  const std::string config = WriteTempFile("resim.yaml", Config(out, 120));
+  Process up({Bin("lockstep"), "up", config});
+  auto code = up.Wait(60s);
+  ASSERT_TRUE(code && *code == 0) << up.Output();
+  const std::string log = out + "/run1/recording.lslog";
+  Process replay({Bin("lockstep"), "log", "replay", "--resimulate", log});
+  code = replay.Wait(90s);
+  ASSERT_TRUE(code) << replay.Output();
+  EXPECT_EQ(*code, 0) << replay.Output();
+  EXPECT_NE(replay.Output().find("re-simulation of frames 1..120: every world hash equal (120 frames compared"), std::string::npos)
+      << replay.Output();
+  const std::string other = WriteTempFile("resim-other.yaml", Config(out, 120, 6));
+  Process refused({Bin("lockstep"), "log", "replay", "--resimulate", log, "--config", other});
+  code = refused.Wait(30s);
+  ASSERT_TRUE(code) << refused.Output();
+  EXPECT_EQ(*code, 3) << refused.Output();
+  EXPECT_NE(refused.Output().find("refused: the log's run used seed 5, the config's seed is 6"), std::string::npos) << refused.Output();
+  std::filesystem::remove_all(out);
+}
+
 TEST(Launcher, CtrlCStopsEveryProcess) {
   const std::string out = std::filesystem::temp_directory_path() / ("lockstep-launcher-int-" + std::to_string(getpid()));
   const std::string config = WriteTempFile("forever.yaml", Config(out, 0));

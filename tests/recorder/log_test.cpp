@@ -250,21 +250,30 @@ TEST(LockstepLog, ATruncatedLogReadsToItsLastWholeFrame) {
   const std::string cut = TempPath("cut");
   std::ifstream in(path, std::ios::binary);
   std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  // Find where frame 250's record ends: read the complete log's index through a copy cut
-  // at growing sizes until 250 whole frames are there, then cut inside frame 251.
+  // Find where frame 250's record ends: the smallest cut that still reads 250 whole frames
+  // (binary search: more bytes never read fewer frames).
   LogReader full(path);
-  uint64_t frames_at_cut = 0;
-  size_t cut_at = 0;
-  for (size_t size = bytes.size() / 2; size < bytes.size(); size += 29) {
+  auto frames_in = [&](size_t size) -> uint64_t {
     std::ofstream(cut, std::ios::binary | std::ios::trunc).write(bytes.data(), static_cast<std::streamsize>(size));
-    LogReader part(cut);
-    ASSERT_TRUE(part.truncated());
-    if (part.last_frame() == 250) {
-      frames_at_cut = part.frame_count();
-      cut_at = size;
-      break;
+    try {
+      LogReader part(cut);
+      EXPECT_TRUE(part.truncated());
+      return part.last_frame();
+    } catch (const LogError&) {
+      return 0;  // cut inside the header: not a log yet
+    }
+  };
+  size_t lo = 8, hi = bytes.size() - 17;  // frames_in(hi) >= 250: only the footer is cut
+  while (lo < hi) {
+    const size_t mid = (lo + hi) / 2;
+    if (frames_in(mid) >= 250) {
+      hi = mid;
+    } else {
+      lo = mid + 1;
     }
   }
+  const size_t cut_at = lo;
+  const uint64_t frames_at_cut = frames_in(cut_at);
   ASSERT_EQ(frames_at_cut, 250u);
   // Cut a few bytes further: still inside frame 251, so still 250 whole frames.
   std::ofstream(cut, std::ios::binary | std::ios::trunc).write(bytes.data(), static_cast<std::streamsize>(cut_at + 3));

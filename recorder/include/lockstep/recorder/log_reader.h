@@ -179,6 +179,7 @@ class LogReader {
   bool truncated() const;
   std::string stop_reason() const;  // the footer's ("stopped", "run ended", ...); "" if truncated
   uint64_t file_size() const;       // bytes
+  uint64_t header_bytes() const;    // bytes before the first frame (magic and header)
 
   // Frame `frame` (first_frame() .. last_frame()) with every actor's state: reads from the
   // keyframe at or before it (at most keyframe_period records). Throws LogError outside.

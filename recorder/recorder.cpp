@@ -5,6 +5,7 @@
 #include <ctime>
 #include <filesystem>
 #include <optional>
+#include <thread>
 
 #include "lockstep/runtime/actor_list.h"
 #include "lockstep/runtime/error.h"
@@ -181,6 +182,7 @@ Recorder::Recorder(Bus& bus, RecorderOptions options)
   if (options_.record_run && options_.output_dir.empty()) {
     throw InputError("recorder: recording every run needs output_dir in the launch config");
   }
+  writer_thread_ = std::thread([this] { WriterLoop(); });
 }
 
 Recorder::~Recorder() {
@@ -189,6 +191,12 @@ Recorder::~Recorder() {
   } catch (const std::exception& e) {
     spdlog::error("recorder: {}", e.what());
   }
+  {
+    std::lock_guard<std::mutex> lock(queue_mu_);
+    quit_ = true;
+  }
+  queue_cv_.notify_all();
+  writer_thread_.join();
 }
 
 std::string Recorder::recording() const { return writer_ ? writer_->path() : std::string(); }
@@ -301,12 +309,22 @@ void Recorder::Start(const msg::Tick& tick, const std::string& path, bool additi
     return;
   }
   inputs_ = std::move(inputs);
+  described_.clear();
+  queued_ = 0;
   hashes_->StartAt(tick.frame());
   spdlog::info("recording run {} from frame {} into {}", tick.run(), tick.frame(), path);
 }
 
 void Recorder::Stop(const std::string& reason) {
   if (!writer_) return;
+  Drain();  // every queued frame written first
+  {
+    std::lock_guard<std::mutex> lock(queue_mu_);
+    if (writer_error_) {
+      spdlog::error("recorder: writing {} failed; the log ends at its last whole frame", writer_->path());
+      writer_error_ = nullptr;
+    }
+  }
   // The last frame's FrameDone follows its ack; wait for it a little.
   if (writer_->frames() > 0) hashes_->WaitDone(writer_->last_frame(), Ms(reason == "service stopped" ? 1000 : 2000));
   auto late = hashes_->Take(UINT64_MAX);
@@ -369,52 +387,112 @@ void Recorder::WriteFrame(const msg::Tick& tick) {
     need(in.events, in.events_count, "PhysicsEvents", &events);
   }
   // The frame before is done (its FrameDone came before this tick, on another topic).
-  if (writer_->frames() > 0) hashes_->WaitDone(tick.frame() - 1, Ms(1000));
-  const auto t0 = std::chrono::steady_clock::now();
-  recorder::FrameInputs f;
-  f.tick = &tick;
-  f.state_frame = state_frame;
-  for (const auto& g : ground) f.ground.push_back(&g);
-  for (const auto& a : air) f.air.push_back(&a);
-  for (const auto& e : events) f.events.push_back(&e);
-  f.hashes = hashes_->Take(tick.frame());
-  // Only actors new in the frame are described: look them up then (no copy per frame).
-  std::optional<msg::SpawnActor> listed_spawn;
-  auto spawn_of = [&](uint32_t id) -> const msg::SpawnActor* {
-    if (auto it = alive_.find(id); it != alive_.end()) return &it->second;
-    std::lock_guard<std::mutex> lock(in.mu);
-    if (auto it = in.listed.find(id); it != in.listed.end()) {
-      listed_spawn = it->second;
-      return &*listed_spawn;
-    }
-    return nullptr;
-  };
+  if (queued_ > 0) hashes_->WaitDone(tick.frame() - 1, Ms(1000));
+  ++queued_;
+  // The frame goes to the writer thread: its serialisation and write stay off the barrier.
+  Job job;
+  job.tick = tick;
+  job.state_frame = state_frame;
+  job.ground = std::move(ground);
+  job.air = std::move(air);
+  job.events = std::move(events);
+  job.hashes = hashes_->Take(tick.frame());
   auto kind_of = [&](const std::string& blueprint) {
     auto it = in.kinds.find(blueprint);
     return it == in.kinds.end() ? msg::ActorKind::ACTOR_OTHER : it->second;
   };
+  auto describe = [&](uint32_t id, const msg::SpawnActor& s) {
+    recorder::ActorInfo a;
+    a.id = id;
+    a.blueprint = s.blueprint().to_string();
+    a.kind = kind_of(a.blueprint);
+    a.parent = s.parent();
+    a.owner = s.owner().to_string();
+    for (const auto& at : s.attributes()) a.attributes.emplace_back(at.key().to_string(), at.value().to_string());
+    a.spawn_pose = s.transform();
+    job.described[id] = std::move(a);
+  };
+  // Describe each actor once per log, when it first shows up (the writer decides which are
+  // new to the frame): the spawns this recorder saw, else the coordinator's actor list.
   for (const auto& [id, s] : alive_) {
     const auto k = kind_of(s.blueprint().to_string());
     if (k != msg::ActorKind::ACTOR_VEHICLE && k != msg::ActorKind::ACTOR_WALKER && k != msg::ActorKind::ACTOR_DRONE) {
-      f.stateless_actors.push_back(id);
+      job.stateless.push_back(id);
     }
+    if (described_.insert(id).second) describe(id, s);
   }
-  f.describe = [&](uint32_t id) -> std::optional<recorder::ActorInfo> {
-    const msg::SpawnActor* s = spawn_of(id);
-    if (s == nullptr) return std::nullopt;
-    recorder::ActorInfo a;
-    a.id = id;
-    a.blueprint = s->blueprint().to_string();
-    a.kind = kind_of(a.blueprint);
-    a.parent = s->parent();
-    a.owner = s->owner().to_string();
-    for (const auto& at : s->attributes()) a.attributes.emplace_back(at.key().to_string(), at.value().to_string());
-    a.spawn_pose = s->transform();
-    return a;
+  auto listed = [&](uint32_t id) {
+    if (described_.count(id)) return;
+    std::lock_guard<std::mutex> lock(in.mu);
+    if (auto it = in.listed.find(id); it != in.listed.end()) {
+      described_.insert(id);
+      describe(id, it->second);
+    }
   };
-  writer_->WriteFrame(f);
-  ++frames_written_;
-  write_us_ = write_us_ + std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
+  for (const auto& g : job.ground) {
+    for (const auto& v : g.vehicles()) listed(v.actor());
+    for (const auto& w : g.walkers()) listed(w.actor());
+  }
+  for (const auto& a : job.air) {
+    for (const auto& d : a.drones()) listed(d.actor());
+  }
+  Enqueue(std::move(job));
+}
+
+void Recorder::Enqueue(Job job) {
+  std::unique_lock<std::mutex> lock(queue_mu_);
+  if (writer_error_) std::rethrow_exception(writer_error_);
+  // At most kQueue frames behind: the run cannot outpace the disk.
+  queue_cv_.wait(lock, [&] { return queue_.size() < kQueue; });
+  queue_.push_back(std::move(job));
+  queue_cv_.notify_all();
+}
+
+void Recorder::Drain() {
+  std::unique_lock<std::mutex> lock(queue_mu_);
+  queue_cv_.wait(lock, [&] { return queue_.empty() && !writing_; });
+}
+
+void Recorder::WriterLoop() {
+  std::unique_lock<std::mutex> lock(queue_mu_);
+  for (;;) {
+    queue_cv_.wait(lock, [&] { return quit_ || !queue_.empty(); });
+    if (queue_.empty()) return;  // quit_ and nothing left
+    Job job = std::move(queue_.front());
+    queue_.pop_front();
+    writing_ = true;
+    queue_cv_.notify_all();
+    lock.unlock();
+    const auto t0 = std::chrono::steady_clock::now();
+    try {
+      recorder::FrameInputs f;
+      f.tick = &job.tick;
+      f.state_frame = job.state_frame;
+      for (const auto& g : job.ground) f.ground.push_back(&g);
+      for (const auto& a : job.air) f.air.push_back(&a);
+      for (const auto& e : job.events) f.events.push_back(&e);
+      f.hashes = std::move(job.hashes);
+      f.stateless_actors = std::move(job.stateless);
+      f.describe = [&](uint32_t id) -> std::optional<recorder::ActorInfo> {
+        auto it = job.described.find(id);
+        if (it == job.described.end()) return std::nullopt;
+        return it->second;
+      };
+      writer_->WriteFrame(f);
+      ++frames_written_;
+      write_us_ = write_us_ + std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();
+    } catch (...) {
+      lock.lock();
+      writer_error_ = std::current_exception();
+      writing_ = false;
+      queue_.clear();
+      queue_cv_.notify_all();
+      continue;
+    }
+    lock.lock();
+    writing_ = false;
+    queue_cv_.notify_all();
+  }
 }
 
 }  // namespace lockstep

@@ -4,10 +4,16 @@
 // start_recorder) until RECORDER_STOP or the end of the run, and, with `record_run`, every
 // run from its first frame. Frame k of a log holds tick k (bit for bit), the states of
 // PerceptionFrame(mode, k), the frame's events and the hashes of the frame before; it acks
-// k only after writing it, so a log has every frame. While not recording it reads no state
+// k once the frame is queued for its writer thread (at most 8 frames behind; a stop, the
+// run's end and the service's end write what is queued), so a log has every frame while
+// the serialisation stays off the barrier. While not recording it reads no state
 // topic and its step does nearly nothing. Its state hash is 0: a log is not world state,
 // so recording or not never changes a run's world hash.
 #include <atomic>
+#include <condition_variable>
+#include <deque>
+#include <exception>
+#include <thread>
 #include <map>
 #include <memory>
 #include <mutex>
@@ -51,6 +57,21 @@ class Recorder final : public ServiceCore {
  private:
   struct Inputs;
   struct Hashes;
+  // One frame for the writer thread.
+  struct Job {
+    msg::Tick tick;
+    uint64_t state_frame = 0;
+    std::vector<msg::GroundState> ground;
+    std::vector<msg::AirState> air;
+    std::vector<msg::PhysicsEvents> events;
+    std::vector<std::pair<uint64_t, recorder::FrameHashes>> hashes;
+    std::vector<uint32_t> stateless;
+    std::map<uint32_t, recorder::ActorInfo> described;  // first seen in this frame
+  };
+  static constexpr size_t kQueue = 8;  // frames the writer may lag behind
+  void Enqueue(Job job);
+  void Drain();
+  void WriterLoop();
   void Start(const msg::Tick& tick, const std::string& path, bool additional_data);
   void Stop(const std::string& reason);
   void Track(const msg::Tick& tick);
@@ -72,6 +93,15 @@ class Recorder final : public ServiceCore {
   uint64_t prelude_frames_ = 0;
   double last_dt_ = -1;
   uint64_t last_frame_ = 0;
+  std::set<uint32_t> described_;                  // actors described in the current log
+  uint64_t queued_ = 0;                           // frames of the current log handed to the writer
+  std::mutex queue_mu_;
+  std::condition_variable queue_cv_;
+  std::deque<Job> queue_;
+  bool writing_ = false;
+  bool quit_ = false;
+  std::exception_ptr writer_error_;
+  std::thread writer_thread_;
   std::atomic<uint64_t> frames_written_{0};
   std::atomic<double> write_us_{0};
   mutable std::mutex announce_mu_;

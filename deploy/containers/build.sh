@@ -87,3 +87,5 @@ need_runtime=0
 for i in "${images[@]}"; do [ "$i" = discovery ] || need_runtime=1; done
 [ $need_runtime = 0 ] || build_one runtime
 for i in "${images[@]}"; do build_one "$i"; done
+# The images these replaced (untagged now): Lockstep's only (label org.lockstep.image).
+$PODMAN image prune -f --filter label=org.lockstep.image=1 >/dev/null || true

@@ -359,6 +359,11 @@ class _Shared:
             if rec is None:
                 return  # AirSim: stopping with no recording is logged and ignored
             self.client.stop_recorder()
+            if not self.synchronous():
+                # The recorder closes the log (its writer thread drained) with the tick that
+                # carries the stop: the tick in flight may not, the one after does.
+                for _ in range(2):
+                    self.client.wait_for_tick(10.0)
             settings = self.load_settings().recording
             try:
                 from lockstep import _lockstep

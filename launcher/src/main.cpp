@@ -26,8 +26,8 @@
 #include "lockstep/runtime/launch_config.h"
 #include "lockstep/runtime/log.h"
 #include "lockstep/runtime/shm_sweep.h"
-#include "log_command.h"
 #include "hashes.h"
+#include "log_command.h"
 #include "progress.h"
 #include "serve.h"
 #include "supervisor.h"
@@ -51,8 +51,10 @@ void SweepShm(bool quiet) {
 int Up(const std::string& config_file, int domain, bool with_coordinator) {
   SweepShm(true);
   // A recorder service joins unless the config says `recorder: false` (docs/recorder.md);
-  // the children inherit this, so the coordinator requires the recorder it starts.
-  setenv("LOCKSTEP_DEFAULT_RECORDER", "1", 1);
+  // the children inherit this, so the coordinator requires the recorder it starts. A
+  // coordinator a script hosts read its config without it and is already ticking: a
+  // recorder added here would join late, without the run's past, so none is added then.
+  if (with_coordinator) setenv("LOCKSTEP_DEFAULT_RECORDER", "1", 1);
   lockstep::LaunchConfig config = lockstep::LoadLaunchConfig(config_file);
   if (domain >= 0) config.domain_id = domain;
   const std::string bin = BinDir();
@@ -310,7 +312,7 @@ int main(int argc, char** argv) {
   map->prefix_command();
 
   auto* log_cmd = app.add_subcommand("log", "Lockstep logs: info, collisions, blocked, export --csv, replay --resimulate, diff A B "
-                                            "(lockstep log --help)");
+                                        "(lockstep log --help)");
   log_cmd->prefix_command();
 
   auto* clean_shm = app.add_subcommand(

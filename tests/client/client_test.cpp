@@ -234,8 +234,11 @@ TEST_F(ClientTest, DroneFuturesCompleteWhenAirSimReportsCompletion) {
   const uint32_t id = client_->spawn("drone.generic_quad", MakePose(47.75, 1.75, 0), {{"role_name", "hero"}});
   client_->tick();
   EXPECT_EQ(mc.Resolve("hero"), id);
-  EXPECT_THROW(mc.takeoffAsync(20, "hero"), ClientError);  // no API control yet, as in AirSim
+  EXPECT_TRUE(mc.isApiControlEnabled("hero"));  // a drone spawned without the attribute off starts under control
+  mc.enableApiControl(false, "hero");
+  EXPECT_FALSE(mc.isApiControlEnabled("hero"));
   mc.enableApiControl(true, "hero");
+  EXPECT_TRUE(mc.isApiControlEnabled("hero"));
   ASSERT_TRUE(mc.armDisarm(true, "hero"));
   CommandFuture takeoff = mc.takeoffAsync(20, "hero");
   EXPECT_TRUE(takeoff.join(60));

@@ -47,7 +47,8 @@ def write_config(out, seed):
     for kind, perception in (('ground_sim', False), ('sensors', True), ('render', True)):
         if os.path.exists(os.path.join(bin_dir, 'lockstep_' + kind)):
             services.append('  - {name: %s, kind: %s, perception: %s}' % (kind, kind, 'true' if perception else 'false'))
-    services.append('  - {name: recorder, kind: recorder, perception: true}')
+    # The recorder writes the whole run as a Lockstep log: run1/recording.lslog (docs/recorder.md).
+    services.append('  - {name: recorder, kind: recorder, perception: true, args: [--record-run]}')
     text = '\n'.join([
         '# Written by examples/showcase.py: every service built on this machine.',
         'name: showcase', 'domain_id: 0', 'seed: %d' % seed,
@@ -328,7 +329,7 @@ def main():
                                                                                  infractions['lane_invasion']),
                  '  ego drove %.1f m, the drone flew %.1f m and ended %.1f m above the ego' % (
                      summary['ego_distance_m'], summary['drone_distance_m'], summary['drone_height_above_ego_m']),
-                 '  output: %s (images/, lidar/, ticks.csv, summary.json, town.png)' % os.path.relpath(args.out),
+                 '  output: %s (images/, lidar/, ticks.csv, summary.json, town.png, run1/recording.lslog)' % os.path.relpath(args.out),
                  '  driving benchmarks (CoRL 2017, NoCrash, Leaderboard routes; docs/benchmarks.md): '
                  'build/bin/lockstep python -m lockstep.benchmarks corl2017 --agent autopilot --episodes 2']
         with open(os.path.join(args.out, 'summary.txt'), 'w') as f:

@@ -79,11 +79,16 @@ def _write_summary(out, results):
     report.write_csv(os.path.join(out, 'summary.csv'), results)
 
 
+def _train_and_all_weathers(args, default_test):
+    """The training and test weathers, and every weather to run: training first, then the test ones not in it."""
+    train_w = _weathers(args.train_weathers, runner.TRAIN_WEATHERS)
+    test_w = _weathers(args.test_weathers, default_test)
+    return train_w, test_w, train_w + [w for w in test_w if w not in train_w]
+
+
 def run_corl2017(args):
     agent = runner.make_agent(args.agent, args.ignore_lights)
-    train_w = _weathers(args.train_weathers, runner.TRAIN_WEATHERS)
-    test_w = _weathers(args.test_weathers, runner.TEST_WEATHERS)
-    weathers = train_w + [w for w in test_w if w not in train_w]
+    train_w, _, weathers = _train_and_all_weathers(args, runner.TEST_WEATHERS)
     tasks = [t for t in report.TASKS if not args.tasks or t in args.tasks.split(',')]
     towns = Towns(args)
     results = []
@@ -131,9 +136,7 @@ def run_corl2017(args):
 
 def run_nocrash(args):
     agent = runner.make_agent(args.agent, args.ignore_lights)
-    train_w = _weathers(args.train_weathers, runner.TRAIN_WEATHERS)
-    test_w = _weathers(args.test_weathers, [10, 14])
-    weathers = train_w + [w for w in test_w if w not in train_w]
+    train_w, test_w, weathers = _train_and_all_weathers(args, [10, 14])
     levels = [t for t in ('Empty', 'Regular', 'Dense') if not args.tasks or t in args.tasks.split(',')]
     towns = Towns(args)
     results = []

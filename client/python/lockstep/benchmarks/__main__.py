@@ -47,6 +47,7 @@ class Towns:
 
     def __init__(self, args):
         self.args = args
+        self.cameras = args.agent in runner.CAMERA_AGENTS   # the agent sees through cameras: render runs too
         self.sim = None
         self.ctx = None
 
@@ -54,7 +55,7 @@ class Towns:
         a = self.args
         if self.sim is None and not a.connect:
             os.environ['LOCKSTEP_DOMAIN'] = str(a.domain)
-            self.sim = runner.Simulation(town, a.domain, a.out, dt=0.1, seed=a.seed)
+            self.sim = runner.Simulation(town, a.domain, a.out, dt=0.1, seed=a.seed, cameras=self.cameras)
         else:
             import carla
             c = carla.Client('localhost', 2000)
@@ -202,7 +203,7 @@ def main(argv=None):
     ap = argparse.ArgumentParser(prog='lockstep bench', description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument('suite', choices=['corl2017', 'nocrash', 'leaderboard', 'generate'])
-    ap.add_argument('--agent', default='autopilot', help='autopilot (Traffic Manager), basic, behavior')
+    ap.add_argument('--agent', default='autopilot', help='autopilot (Traffic Manager), basic, behavior (CARLA\'s agents), modular (the paper\'s MP baseline)')
     ap.add_argument('--episodes', type=int, default=25, help='episodes per task and weather (at most 25)')
     ap.add_argument('--towns', default='Town01,Town02')
     ap.add_argument('--tasks', default='', help="comma-separated task names (default: all)")

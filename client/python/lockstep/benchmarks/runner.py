@@ -229,12 +229,18 @@ class CarlaAgent:
         return control
 
 
+CAMERA_AGENTS = ('modular',)   # agents that drive from cameras: their simulation runs render too
+
+
 def make_agent(name, ignore_lights=False):
     if name == 'autopilot':
         return AutopilotAgent(ignore_lights)
     if name in ('basic', 'behavior'):
         return CarlaAgent(name, ignore_lights=ignore_lights)
-    raise ValueError("unknown agent '%s' (autopilot, basic, behavior)" % name)
+    if name == 'modular':
+        from .modular import ModularAgent
+        return ModularAgent()   # ignores lights always, as the CoRL 2017 protocol allows
+    raise ValueError("unknown agent '%s' (autopilot, basic, behavior, modular)" % name)
 
 
 # ---------------------------------------------------------------- episodes
@@ -390,6 +396,8 @@ def run_episode(ctx, agent, episode, *, task, weather, vehicles=0, walkers=0, co
                        'final_time': round(now if end else limit, 3), 'final_distance': round(d, 3),
                        'frames': len(rows), 'wall_s': round(time.time() - wall0, 3)})
     finally:
+        if hasattr(agent, 'teardown'):
+            agent.teardown(ctx)   # the agent's own sensors
         try:
             sensor.stop()
         except Exception:  # noqa: BLE001
@@ -402,6 +410,8 @@ def run_episode(ctx, agent, episode, *, task, weather, vehicles=0, walkers=0, co
     result.update(inf)
     result['km'] = round(metrics.distance_km(rows), 5)
     result['collided_as_failure'] = reason == 'collision'
+    if getattr(agent, 'stats', None):
+        result['agent_stats'] = ' '.join('%s=%d' % (k.replace(' ', '_'), v) for k, v in agent.stats.items())
     if log_path:
         keys = list(rows[0].keys()) if rows else ['frame']
         with open(log_path, 'w', newline='') as f:

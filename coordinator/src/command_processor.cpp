@@ -50,7 +50,7 @@ std::string First(S&&... reasons) {
 
 // CARLA's world.debug shapes: finite geometry, sizes >= 0, a unit box rotation.
 std::string CheckDebugDraw(const msg::DebugDraw& d) {
-  if (d.shapes().empty()) return "debug draw without shapes";
+  if (d.shapes().empty() && !d.flush_persistent()) return "debug draw without shapes (nor a flush)";
   for (std::size_t i = 0; i < d.shapes().size(); ++i) {
     const auto& s = d.shapes()[i];
     const std::string at = "debug shape " + std::to_string(i) + ": ";

@@ -330,14 +330,20 @@ render::DebugDrawList RenderService::CosmosLines(const msg::GroundState* ground,
 
 // world.debug shapes of a tick issued at `issued` (the frame before it, when the client
 // drew them). Strings and HUD shapes are for CARLA's spectator HUD, which no camera shows.
-void RenderService::AddDebugShapes(const msg::DebugDraw& d, uint64_t first_frame, double issued) {
+// flush_persistent (AirSim's simFlushPersistentMarkers: Unreal's FlushPersistentDebugLines)
+// first erases every world shape drawn so far: Unreal's persistent line batcher holds the
+// persistent shapes and the timed ones alike (DrawDebugHelpers' GetDebugLineBatcher), and
+// CARLA draws all of its shapes into it; only a shape drawn for one frame is elsewhere, and
+// such a shape, drawn before this tick, is already gone.
+void AddDebugDraw(render::DebugShapes& shapes, const msg::DebugDraw& d, uint64_t first_frame, double issued) {
+  if (d.flush_persistent()) shapes.Clear();
   for (const auto& s : d.shapes()) {
     if (s.hud()) continue;
     const render::DebugColor c{s.r(), s.g(), s.b()};
     render::DebugDrawList list;
     switch (s.kind()) {
       case msg::DebugShapeKind::DEBUG_POINT:
-        debug_.AddPoint(render::DebugPoint{ToVec(s.begin()), s.size(), c}, first_frame, issued, s.life_time());
+        shapes.AddPoint(render::DebugPoint{ToVec(s.begin()), s.size(), c}, first_frame, issued, s.life_time());
         continue;
       case msg::DebugShapeKind::DEBUG_LINE: list.lines.push_back({ToVec(s.begin()), ToVec(s.end()), s.size(), c}); break;
       case msg::DebugShapeKind::DEBUG_ARROW: list.AddArrow(ToVec(s.begin()), ToVec(s.end()), s.size(), s.arrow_size(), c); break;
@@ -350,8 +356,12 @@ void RenderService::AddDebugShapes(const msg::DebugDraw& d, uint64_t first_frame
       }
       case msg::DebugShapeKind::DEBUG_STRING: continue;
     }
-    for (const auto& l : list.lines) debug_.AddLine(l, first_frame, issued, s.life_time());
+    for (const auto& l : list.lines) shapes.AddLine(l, first_frame, issued, s.life_time());
   }
+}
+
+void RenderService::AddDebugShapes(const msg::DebugDraw& d, uint64_t first_frame, double issued) {
+  AddDebugDraw(debug_, d, first_frame, issued);
 }
 
 bool RenderService::Mine(const msg::SpawnActor& s) const {

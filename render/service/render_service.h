@@ -34,6 +34,11 @@ struct RenderOptions {
 // std::invalid_argument naming the option.
 RenderOptions ParseRenderOptions(int* argc, char** argv);
 
+// One DebugDraw command (CARLA's world.debug, AirSim's plotting calls) into `shapes`: its
+// world shapes from `first_frame` on, issued at sim time `issued`; flush_persistent first
+// erases every shape drawn so far (AirSim's simFlushPersistentMarkers).
+void AddDebugDraw(render::DebugShapes& shapes, const msg::DebugDraw& d, uint64_t first_frame, double issued);
+
 class RenderService final : public ServiceCore {
  public:
   RenderService(Bus& bus, std::string name, RenderOptions options);

@@ -306,6 +306,15 @@ TEST_F(CommandProcessorTest, DebugShapesGoIntoTheTickAndBadOnesAreRejectedWithTh
   ASSERT_EQ(pending.size(), 1u);
   EXPECT_EQ(pending[0].body()._d(), msg::CommandKind::CMD_DEBUG_DRAW);
   EXPECT_FALSE(Submit(Draw({})).accepted()) << "a draw without shapes";
+  // AirSim's simFlushPersistentMarkers: a flush with no shapes goes into the tick.
+  msg::DebugDraw flush;
+  flush.flush_persistent(true);
+  msg::CommandBody fb;
+  fb.debug_draw(flush);
+  ASSERT_TRUE(Submit(Make(fb)).accepted());
+  pending = p.TakePending();
+  ASSERT_EQ(pending.size(), 1u);
+  EXPECT_TRUE(pending[0].body().debug_draw().flush_persistent());
   msg::DebugShape nan = Box();
   nan.end().y(std::numeric_limits<double>::quiet_NaN());
   auto r = Submit(Draw({Box(), nan}));

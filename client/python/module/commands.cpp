@@ -331,6 +331,7 @@ msg::CommandBody CommandFromDict(const py::dict& d) {
     msg::DebugDraw x;
     for (const auto& item : f.Need<py::list>("shapes")) x.shapes().push_back(DebugShapeFromDict(item.cast<py::dict>()));
     if (x.shapes().size() > 4096) throw py::value_error("command 'debug_draw': at most 4096 shapes");
+    x.flush_persistent(f.Get<bool>("flush_persistent", false));  // AirSim's simFlushPersistentMarkers
     b.debug_draw(x);
   } else if (type == "v2x_send") {
     msg::V2XSend x;

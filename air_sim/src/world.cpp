@@ -374,20 +374,49 @@ void StartUnsteered(Ctx& c, const Command& cm, double t) {
   u.ends = ends;
   u.end_time = t + span;
   u.still_since = -1;
+  u.resume = CommandMode::kIdle;
+  u.start_time = t;
+  ds.command.id = cm.id;  // not running: kept for API control taken back (SetApiControl)
+  ds.command.body = cm.body;
   if (ends == DroneState::Unsteered::Ends::kDuration && span <= 0) FinishUnsteered(c, CommandStatus::kCompleted, t);
 }
 
+void ApplyCommand(Ctx& c, const Command& cm, double t);
+
 // enableApiControl(true / false). Released, the running command goes on unsteered (AirSim's
 // waiter runs on) and the drone gets simple_flight's goal without an RC: zero throttle.
+// Taken back while that command (or one issued meanwhile) still runs, it steers again: AirSim's
+// loop keeps sending its goals, which simple_flight accepts again (SimpleFlightApi::
+// enableApiControl cancels nothing); its timeout or duration still counts from its call.
 void SetApiControl(Ctx& c, bool enable, double t) {
   DroneState& ds = c.ds;
   if (enable == ds.api_control) return;
   ds.api_control = enable;
-  if (enable) return;
   ActiveCommand& ac = ds.command;
+  DroneState::Unsteered& u = ds.unsteered;
+  if (enable) {
+    if (!u.running) return;
+    u.running = false;
+    if (u.resume != CommandMode::kIdle) {
+      ac.mode = u.resume;  // the ActiveCommand kept its body, path and progress
+      ac.running = true;
+      Report(c, ac.id, CommandStatus::kRunning, t, "API control taken back: the command steers again");
+      return;
+    }
+    if (ac.id != u.id) return;
+    Command cm;
+    cm.id = u.id;
+    cm.drone = ds.id;
+    cm.body = ac.body;
+    ApplyCommand(c, cm, t);
+    if (ac.running && ac.id == u.id) {
+      ac.start_time = u.start_time;
+      ac.end_time = u.end_time;
+    }
+    return;
+  }
   if (ac.running) {
     using E = DroneState::Unsteered::Ends;
-    DroneState::Unsteered& u = ds.unsteered;
     u.id = ac.id;
     u.running = true;
     u.ends = ac.mode == CommandMode::kLand ? E::kLand
@@ -396,9 +425,10 @@ void SetApiControl(Ctx& c, bool enable, double t) {
                  : E::kDuration;
     u.end_time = ac.end_time;
     u.still_since = -1;
+    u.resume = ac.mode;
+    u.start_time = ac.start_time;
     ac.running = false;
   }
-  (void)t;
   ac.mode = CommandMode::kIdle;
 }
 
@@ -1052,6 +1082,8 @@ std::uint64_t StateHash(const WorldState& state) {
     mix(&d.unsteered.ends, sizeof d.unsteered.ends);
     mixd(d.unsteered.end_time);
     mixd(d.unsteered.still_since);
+    mix(&d.unsteered.resume, sizeof d.unsteered.resume);
+    mixd(d.unsteered.start_time);
     mixb(d.grounded);
     mix(&d.carrier, sizeof d.carrier);
     mixv(d.carrier_offset);

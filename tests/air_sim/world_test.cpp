@@ -373,6 +373,71 @@ TEST(air_world, WithoutApiControlCommandsSteerNothingAndRunOutTheirTime) {
   EXPECT_EQ(sim.Status(far), CommandStatus::kTimedOut);
 }
 
+// AirSim 1.8 (MultirotorApiBase's loops, SimpleFlightApi::enableApiControl): releasing API
+// control cancels nothing; the call's loop keeps sending its goals, refused until control is
+// taken back, then accepted: the command steers again and completes, its timeout or duration
+// counted from the call.
+TEST(air_world, ApiControlTakenBackResumesTheRunningCommand) {
+  Sim sim;
+  sim.Add(1);
+  sim.Run(0.5);
+  sim.TakeOff(1);
+  const CommandId up = sim.Send(1, cmd::MoveToPosition{sim.D(1).position + Vec3(0, 0, 8), 3.0, 20.0});
+  ASSERT_TRUE(sim.RunUntil([&] { return sim.Done(up); }, 15));
+  ASSERT_EQ(sim.Status(up), CommandStatus::kCompleted);
+  // Released mid-run: unsteered (it falls), RUNNING; taken back: it reaches its goal.
+  const Vec3 goal = sim.D(1).position + Vec3(12, 0, 0);
+  const CommandId m = sim.Send(1, cmd::MoveToPosition{goal, 3.0, 30.0});
+  sim.Run(1.0);
+  const double x_released = sim.D(1).position.x();
+  sim.Send(1, cmd::SetApiControl{false});
+  sim.Run(0.4);
+  EXPECT_EQ(sim.Status(m), CommandStatus::kRunning);
+  EXPECT_LT(sim.D(1).velocity.z(), -1.0) << "zero throttle without API control";
+  sim.Send(1, cmd::SetApiControl{true});
+  ASSERT_TRUE(sim.RunUntil([&] { return sim.Done(m); }, 20));
+  EXPECT_EQ(sim.Status(m), CommandStatus::kCompleted);
+  EXPECT_LT((sim.D(1).position - goal).norm(), 0.25);
+  EXPECT_GT(sim.D(1).position.x(), x_released + 5);
+  // Issued without API control: it steers nothing until control is taken back, then flies to its goal.
+  sim.Send(1, cmd::SetApiControl{false});
+  sim.Tick();
+  const Vec3 goal2 = sim.D(1).position + Vec3(0, 8, 0);
+  const CommandId m2 = sim.Send(1, cmd::MoveToPosition{goal2, 3.0, 30.0});
+  sim.Run(0.3);
+  EXPECT_EQ(sim.Status(m2), CommandStatus::kRunning);
+  EXPECT_LT(sim.D(1).position.y() - (goal2.y() - 8), 0.05) << "no steering without API control";
+  sim.Send(1, cmd::SetApiControl{true});
+  ASSERT_TRUE(sim.RunUntil([&] { return sim.Done(m2); }, 20));
+  EXPECT_EQ(sim.Status(m2), CommandStatus::kCompleted);
+  EXPECT_LT((sim.D(1).position - goal2).norm(), 0.25);
+  // A timed move keeps the duration from its call: issued without control at t0, it ends at t0 + 2 s.
+  sim.Send(1, cmd::SetApiControl{false});
+  sim.Tick();
+  const CommandId v = sim.Send(1, cmd::MoveByVelocity{Vec3(1, 0, 0), 2.0});
+  sim.Tick();
+  const double t0 = sim.last_report[v].time;
+  sim.Run(0.5);
+  sim.Send(1, cmd::SetApiControl{true});
+  const double x0 = sim.D(1).position.x();
+  ASSERT_TRUE(sim.RunUntil([&] { return sim.Done(v); }, 5));
+  EXPECT_EQ(sim.Status(v), CommandStatus::kCompleted);
+  EXPECT_NEAR(sim.last_report[v].time, t0 + 2.0, 1e-9);
+  EXPECT_GT(sim.D(1).position.x(), x0 + 0.3) << "it steered once control was back";
+  // Taken back after the command ended: nothing resumes (motors stay at zero throttle).
+  const CommandId late = sim.Send(1, cmd::MoveToPosition{sim.D(1).position + Vec3(10, 0, 0), 3.0, 30.0});
+  sim.Tick();
+  sim.Send(1, cmd::SetApiControl{false});
+  const CommandId other = sim.Send(1, cmd::Hover{});  // replaces it (AirSim's SingleTaskCall): CANCELLED
+  sim.Tick();
+  EXPECT_EQ(sim.Status(late), CommandStatus::kCancelled);
+  EXPECT_EQ(sim.Status(other), CommandStatus::kCompleted);
+  sim.Send(1, cmd::SetApiControl{true});
+  sim.Run(0.3);
+  EXPECT_EQ(sim.Status(late), CommandStatus::kCancelled);
+  EXPECT_EQ(sim.D(1).command.mode, CommandMode::kIdle);
+}
+
 TEST(air_world, ApiControlIsPartOfTheStateHash) {
   Sim a, b;
   a.Add(1);

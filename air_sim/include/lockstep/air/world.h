@@ -132,6 +132,13 @@ struct DroneState {
     enum class Ends : std::uint8_t { kDuration, kTimeout, kLand } ends = Ends::kDuration;
     double end_time = 0;                 // s
     double still_since = -1;             // s, kLand: when the drone stopped descending
+    // On API control taken back before it ends, the command steers again, as AirSim's loop
+    // (still running) then gets its goals accepted: a command released mid-run goes on from
+    // where it was (`resume`, its mode; the ActiveCommand kept its state); one issued without
+    // API control (resume kIdle; the ActiveCommand holds its id and body) starts then, its
+    // deadline still counted from `start_time`.
+    CommandMode resume = CommandMode::kIdle;
+    double start_time = 0;               // s
   } unsteered;
   LandedState landed = LandedState::kLanded;
   bool grounded = false;                 // AirSim ground lock: levelled, moving with the surface

@@ -150,6 +150,19 @@ def test_quaternion_arithmetic_is_airsims():
     assert (q + q).get_length() == pytest.approx(2.0)
 
 
+def test_plotted_shapes_live_as_unreals_draw_debug():
+    """Unreal's GetDebugLineLifeTime under AirSim's simPlot* calls: is_persistent lasts until
+    simFlushPersistentMarkers whatever the duration; else the duration when > 0; else one frame:
+    shown in the frame of its tick (life over one step), gone from the next (at most two steps)."""
+    from lockstep.airsim.client import _plot_life
+    dt = 0.05
+    assert _plot_life(5.0, True, dt) == 0.0
+    assert _plot_life(-1.0, True, dt) == 0.0
+    assert _plot_life(2.5, False, dt) == 2.5
+    for d in (-1.0, 0.0, None):
+        assert dt < _plot_life(d, False, dt) <= 2 * dt
+
+
 def test_pfm_round_trip(tmp_path):
     import numpy as np
     img = np.arange(12, dtype=np.float32).reshape(3, 4)

@@ -242,6 +242,34 @@ def test_api_control_is_the_vehicles_across_processes(client):
     assert float(out[4]) < 0.02   # m: neither move steered the drone
 
 
+def test_api_control_taken_back_resumes_the_running_move(client):
+    """AirSim 1.8: enableApiControl(False) cancels nothing; moveToPositionAsync's loop keeps
+    sending its goals (refused meanwhile) and, control taken back, reaches its target."""
+    client.reset()
+    client.enableApiControl(True, 'Drone2')
+    assert client.armDisarm(True, 'Drone2')
+    assert client.takeoffAsync(vehicle_name='Drone2').join()
+    p0 = client.getMultirotorState('Drone2').kinematics_estimated.position
+    goal = (p0.x_val + 8, p0.y_val, p0.z_val - 3)
+    f = client.moveToPositionAsync(*goal, 3, timeout_sec=60, vehicle_name='Drone2')
+    for _ in range(10):
+        client._client.tick()
+    client.enableApiControl(False, 'Drone2')
+    for _ in range(6):
+        client._client.tick()
+    p1 = client.getMultirotorState('Drone2').kinematics_estimated.position
+    assert p1.x_val - p0.x_val < 7   # still on its way
+    client.enableApiControl(True, 'Drone2')
+    assert f.join() is True
+    p = client.getMultirotorState('Drone2').kinematics_estimated.position
+    assert (p - airsim_vector(goal)).get_length() < 0.5
+
+
+def airsim_vector(t):
+    import airsim
+    return airsim.Vector3r(*t)
+
+
 def test_a_camera_over_the_image_bound_arrives_whole(client):
     """A settings camera of 2000 x 1100 (more than msg::Image's 1920 x 1080 BGRA) comes as a
     LargeImage on its own topic between the render process and this one."""
@@ -292,19 +320,80 @@ def test_segmentation_and_infrared_show_airsims_object_ids(client):
     assert centre() == ((195, 176, 115), (7, 7, 7))   # palette[7] is RGB (115, 176, 195)
 
 
+def test_flush_persistent_markers_erases_what_was_plotted(client):
+    """simFlushPersistentMarkers is Unreal's FlushPersistentDebugLines: the persistent marker
+    and the one with a duration are gone from the next frame; a marker plotted after it shows."""
+    if not has_service('render'):
+        pytest.skip('needs render')
+    import airsim
+    _lift(client)
+    req = airsim.ImageRequest('probe', airsim.ImageType.Scene, False, False)
+    client.simGetImages([req], 'Drone1')   # the camera exists before the shapes are drawn
+    body = client.simGetVehiclePose('Drone1').position
+    # 5 m under the probe camera (0.4 m ahead of the body, looking down), and 1.5 m east and west of that.
+    at = [airsim.Vector3r(body.x_val + 0.4, body.y_val + dy, body.z_val + 5) for dy in (0.0, 1.5, -1.5)]
+
+    def colours():
+        client._client.tick()
+        frame = client._client.frame()
+        for _ in range(10):
+            r = client.simGetImages([req], 'Drone1')[0]
+            if r.frame >= frame:
+                break
+            client._client.tick()
+        assert r.frame >= frame
+        img = np.frombuffer(r.image_data_uint8, np.uint8).reshape(r.height, r.width, 3).astype(int)
+        b, g, rr = img[:, :, 0], img[:, :, 1], img[:, :, 2]
+        return {'red': int(((rr > 200) & (g < 80) & (b < 80)).sum()), 'green': int(((g > 200) & (rr < 80) & (b < 80)).sum()),
+                'blue': int(((b > 200) & (rr < 80) & (g < 80)).sum())}
+
+    client.simPlotPoints([at[0]], [1.0, 0.0, 0.0, 1.0], 10, is_persistent=True)
+    client.simPlotPoints([at[1]], [0.0, 1.0, 0.0, 1.0], 10, duration=600)
+    n = colours()
+    assert n['red'] >= 50 and n['green'] >= 50 and n['blue'] == 0   # 10 x 10 px each
+    client.simFlushPersistentMarkers()
+    client.simPlotPoints([at[2]], [0.0, 0.0, 1.0, 1.0], 10, is_persistent=True)
+    n = colours()
+    assert n['red'] == 0 and n['green'] == 0 and n['blue'] >= 50
+    client.simFlushPersistentMarkers()
+    assert colours()['blue'] == 0
+
+
 def test_car_client_drives_a_ground_sim_car(client):
-    """AirSim's CarClient on ground_sim: with no car, a PhysXCar on the map's first spawn point;
-    throttle moves it forward along its heading (NED from its start)."""
+    """AirSim's CarClient on ground_sim: with no car, a PhysXCar on the map's first spawn point.
+    As AirSim's car: API control starts off and without it the keyboard's controls (none
+    pressed) replace setCarControls'; with it, throttle moves the car forward along its
+    heading (NED from its start, forward speed positive); a change of API control starts from
+    CarControls(); arming is always True."""
     if not has_service('ground_sim'):
         pytest.skip('needs ground_sim')
     import airsim
     car = airsim.CarClient()
-    controls = airsim.CarControls(throttle=0.5)
-    car.setCarControls(controls)
+    assert car.isApiControlEnabled() is False
+    car.setCarControls(airsim.CarControls(throttle=0.5))
+    for _ in range(40):
+        car._client.tick()
+    assert abs(car.getCarState().speed) < 0.5   # 2 s at throttle 0.5 would be several m/s
+    assert car.getCarControls().throttle == 0
+    client.enableApiControl(False, 'Drone1')   # the default drone ('' names it to a MultirotorClient)
+    client._client.tick()
+    car.enableApiControl(True)
+    assert car.isApiControlEnabled() is True and car.armDisarm(True) is True
+    client._client.tick()
+    assert client.isApiControlEnabled('Drone1') is False   # the car's, not a drone's
+    car.setCarControls(airsim.CarControls(throttle=0.5))
     for _ in range(40):
         car._client.tick()
     s = car.getCarState()
     assert s.speed > 1.0
     assert s.kinematics_estimated.position.get_length() > 1.0
+    assert s.maxrpm > 0 and s.timestamp > 0
     assert car.getCarControls().throttle == 0.5
+    car.enableApiControl(False)
+    assert car.getCarControls().throttle == 0
+    car._client.tick()
+    a = car._car('')
+    assert car._client.state(a['id'])['control']['throttle'] == 0   # back to the keyboard: nothing pressed
+    car.enableApiControl(True)
+    assert car.getCarControls().throttle == 0   # CarControls() after the change
     car.setCarControls(airsim.CarControls(brake=1.0))

@@ -291,7 +291,8 @@ class _Shared:
         self.weather_enabled = False
         self.time_of_day = None
         self.spawned_objects = {}  # name -> actor id (simSpawnObject)
-        self.markers = []          # plotted markers (kept for simFlushPersistentMarkers)
+        self.car_api = {}          # (run, car actor id) -> API control (CarClient.enableApiControl)
+        self.car_controls = {}     # (run, car actor id) -> the CarControls last set under API control
 
     # --- settings and the run ---
     def load_settings(self):
@@ -571,6 +572,18 @@ def _shared(client):
 
 def _dur(d):
     return d is not None and d > 0
+
+
+def _plot_life(duration, is_persistent, dt):
+    """A plotted shape's life_time (s) as Unreal's DrawDebug* gives it (GetDebugLineLifeTime):
+    persistent: until flushed (0), whatever the duration; else the duration when > 0; else one
+    frame (Unreal's non-persistent line batcher): shown in the frame of the tick that carries
+    it and gone from the next (a life of one step would end before its frame is drawn)."""
+    if is_persistent:
+        return 0.0
+    if duration is not None and duration > 0:
+        return float(duration)
+    return 1.5 * dt
 
 
 # --------------------------------------------------------------------------- VehicleClient
@@ -1427,8 +1440,7 @@ class VehicleClient:
         st = self._client.run_status()
         if st is None or not any(k == 'render' and alive for _, k, alive, _ in st['members']):
             return
-        dt = self._client.world_info()['settings']['fixed_delta_seconds'] or 0.05
-        life = float(duration) if duration and duration > 0 else (0.0 if is_persistent else dt)
+        life = _plot_life(duration, is_persistent, self._client.world_info()['settings']['fixed_delta_seconds'] or 0.05)
         col = tuple(int(round(float(c) * 255)) for c in (color_rgba or (1.0, 0.0, 0.0, 1.0)))
         start = self._s.start()
         out = []
@@ -1444,8 +1456,6 @@ class VehicleClient:
             out.append(d)
         for k in range(0, len(out), 4096):
             self._client.submit({'type': 'debug_draw', 'shapes': out[k:k + 4096]})
-        if is_persistent:
-            self._s.markers.append(len(out))
 
     @staticmethod
     def _points(call, points):
@@ -1455,9 +1465,14 @@ class VehicleClient:
         return list(points)
 
     def simFlushPersistentMarkers(self):
-        if self._s.markers:
-            _unsupported('simFlushPersistentMarkers', 'no command erases debug shapes: persistent markers last '
-                         'until the run ends')
+        """AirSim's: Unreal's FlushPersistentDebugLines, which erases every plotted shape still
+        shown, the persistent ones and those with a duration alike (both are in Unreal's
+        persistent line batcher), and CARLA's world.debug shapes too; a debug_draw that
+        flushes, from the next tick on."""
+        st = self._client.run_status()
+        if st is None or not any(k == 'render' and alive for _, k, alive, _ in st['members']):
+            return   # nothing is drawn without a render service
+        self._client.submit({'type': 'debug_draw', 'shapes': [], 'flush_persistent': True})
 
     def simPlotPoints(self, points, color_rgba=[1.0, 0.0, 0.0, 1.0], size=10.0, duration=-1.0, is_persistent=False):
         pts = self._points('simPlotPoints', points)
@@ -1855,10 +1870,21 @@ def _kinematics(s):
 # --------------------------------------------------------------------------- CarClient
 class CarClient(VehicleClient):
     """AirSim's CarClient on ground_sim's vehicles: SimMode "Car" or a car named by its
-    role_name (or 'Car<id>')."""
+    role_name (or 'Car<id>'). As AirSim's PhysXCar (CarPawnApi, CarPawnSimApi): API control
+    starts off; without it the car gets AirSim's keyboard/joystick controls (none pressed:
+    CarControls()) every frame, so setCarControls has no lasting effect; a change of API
+    control starts from CarControls(); arming is not a car's (True)."""
 
     def _car(self, vehicle_name):
         cars = [a for a in self._client.actors() if a['kind'] == 'vehicle']
+        if not vehicle_name:
+            # AirSim's default vehicle: the settings' first car (else AirSim's PhysXCar), else any car.
+            s = self._s.load_settings()
+            names = [v.name for v in s.all_vehicles() if v.mode == 'Car'] + ['PhysXCar']
+            for n in names:
+                for a in cars:
+                    if a['attributes'].get('role_name', '') == n:
+                        return a
         for a in cars:
             role = a['attributes'].get('role_name', '')
             if not vehicle_name or vehicle_name in (role, 'Car%d' % a['id']):
@@ -1881,21 +1907,60 @@ class CarClient(VehicleClient):
             return self._car(vehicle_name)
         raise lockstep.ClientError("no car named '%s'" % vehicle_name)
 
-    def setCarControls(self, controls, vehicle_name=''):
-        a = self._car(vehicle_name)
+    def _key(self, a):
+        return (self._client.world_info()['run'], a['id'])
+
+    def _apply(self, a, controls):
         reverse = controls.is_manual_gear and controls.manual_gear < 0 or controls.throttle < 0
         self._client.submit({'type': 'vehicle_control', 'actor': a['id'], 'throttle': float(min(abs(controls.throttle), 1)),
                              'steer': float(max(-1.0, min(1.0, controls.steering))), 'brake': float(controls.brake),
                              'hand_brake': bool(controls.handbrake), 'reverse': bool(reverse),
                              'manual_gear_shift': bool(controls.is_manual_gear), 'gear': int(controls.manual_gear)})
-        self._s.cameras.setdefault(('car_controls', a['id']), {})['controls'] = controls
+
+    # --- API control: the car's (held by this process: a car has no API control flag on the wire) ---
+    def enableApiControl(self, is_enabled, vehicle_name=''):
+        from .types import CarControls
+        a = self._car(vehicle_name)
+        with self._s.lock:
+            if self._s.car_api.get(self._key(a), False) == bool(is_enabled):
+                return
+            self._s.car_api[self._key(a)] = bool(is_enabled)
+            self._s.car_controls[self._key(a)] = CarControls()   # CarPawnApi::enableApiControl: last_controls_ = CarControls()
+            if not is_enabled:
+                self._apply(a, CarControls())   # back to the keyboard/joystick: nothing pressed
+
+    def isApiControlEnabled(self, vehicle_name=''):
+        a = self._car(vehicle_name)
+        return self._s.car_api.get(self._key(a), False)
+
+    def armDisarm(self, arm, vehicle_name=''):
+        """AirSim's CarPawnApi::armDisarm: cars are not armed; True."""
+        self._car(vehicle_name)
+        return True
+
+    def setCarControls(self, controls, vehicle_name=''):
+        a = self._car(vehicle_name)
+        with self._s.lock:
+            if not self._s.car_api.get(self._key(a), False):
+                # CarPawnSimApi::updateCarControls: without API control the keyboard/joystick
+                # controls replace these in the frame they were set.
+                return
+            self._s.car_controls[self._key(a)] = controls
+            self._apply(a, controls)
 
     def getCarControls(self, vehicle_name=''):
         from .types import CarControls
         a = self._car(vehicle_name)
-        return self._s.cameras.get(('car_controls', a['id']), {}).get('controls', CarControls())
+        if not self._s.car_api.get(self._key(a), False):
+            return CarControls()   # the keyboard/joystick's, nothing pressed
+        return self._s.car_controls.get(self._key(a), CarControls())
 
     def getCarState(self, vehicle_name=''):
+        """speed: forward speed (m/s, negative backwards, as Unreal's GetForwardSpeed); gear the
+        gearbox's; handbrake the API's; kinematics in NED from the car's start (angular
+        velocity in the body FRD frame); rpm 0 (the engine's speed is not on the wire), maxrpm
+        the physics control's."""
+        from .types import CarControls
         a = self._car(vehicle_name)
         st = self._client.state(a['id'])
         home = a['spawn_transform'][:3]
@@ -1903,14 +1968,20 @@ class CarClient(VehicleClient):
         if st is None:
             return out
         v = st['velocity']
-        out.speed = math.sqrt(sum(x * x for x in v))
+        q = st['transform'][3:7]
+        fwd = _rotate_vector(Quaternionr(q[1], q[2], q[3], q[0]), Vector3r(1, 0, 0))
+        out.speed = v[0] * fwd.x_val + v[1] * fwd.y_val + v[2] * fwd.z_val
         out.gear = int(st.get('gear', 0))
-        out.handbrake = bool(st.get('control', {}).get('hand_brake', False))
+        phys = self._client.vehicle_physics(a['id'])
+        out.maxrpm = float(phys['max_rpm']) if phys else 0.0
+        ctl = self._s.car_controls.get(self._key(a), CarControls()) if self._s.car_api.get(self._key(a), False) else CarControls()
+        out.handbrake = bool(ctl.handbrake)
         k = KinematicsState()
         k.position = _v(geo.enu_to_ned_pos(st['transform'][:3], home))
-        k.orientation = geo.enu_to_ned_quat(st['transform'][3:7])
+        k.orientation = geo.enu_to_ned_quat(q)
         k.linear_velocity = _v(geo.enu_to_ned_pos(v, (0, 0, 0)))
-        k.angular_velocity = _v(st['angular_velocity'])
+        w = _rotate_vector(Quaternionr(-q[1], -q[2], -q[3], q[0]), Vector3r(*st['angular_velocity']))   # body FLU
+        k.angular_velocity = Vector3r(w.x_val, -w.y_val, -w.z_val)   # body FRD
         k.linear_acceleration = _v(geo.enu_to_ned_pos(st['acceleration'], (0, 0, 0)))
         out.kinematics_estimated = k
         out.timestamp = int(round(self._s.sim_time() * 1e9))

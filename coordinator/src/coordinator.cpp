@@ -25,6 +25,7 @@
 #include "lockstep/runtime/hash.h"
 #include "lockstep/runtime/log.h"
 #include "lockstep/runtime/messages.h"
+#include "lockstep/runtime/tick_log.h"
 #include "playback.h"
 
 namespace lockstep {
@@ -189,7 +190,7 @@ struct Coordinator::Impl {
     {
       std::lock_guard<std::mutex> lock(mu);
       const std::string name = a.service().to_string();
-      if (members.OnAck(name, run, a)) status_dirty = true;
+      if (members.OnAck(name, run, a, open_tick.frame())) status_dirty = true;
       wake = barrier.OnAck(name, a.run(), a.frame(), a.state_hash()) == TickBarrier::AckResult::kCounted &&
              barrier.Complete();
       if (wake && CanChainSynchronous()) {
@@ -417,7 +418,11 @@ struct Coordinator::Impl {
     s.members(list);
     s.diverged(Diverged(false));
     s.failed_service(failed_service);
-    s.reason(failure_reason.substr(0, 511));
+    // A fault names who waits for the failed service's replacement (membership.cpp).
+    s.reason((state == RunState::RUN_FAULTED && barrier.open()
+                  ? members.FaultReason(failure_reason, failed_service, run, barrier.frame())
+                  : failure_reason)
+                 .substr(0, 511));
     Post(status_writer, s);
     last_status = now;
     status_dirty = false;
@@ -470,23 +475,7 @@ struct Coordinator::Impl {
       }
       keep_after = std::min(keep_after, from);
     }
-    if (keep_after <= log_first_frame || log.empty()) return;
-    // Tick keep_after + 1 from the last logged tick at or before it, inferred as replay does.
-    size_t base = 0;
-    while (base + 1 < log.size() && log[base + 1].frame() <= keep_after + 1) ++base;
-    msg::Tick first = log[base];
-    while (first.frame() < keep_after + 1) {
-      first.commands({});
-      first.frame(first.frame() + 1);
-      first.sim_time(first.sim_time() + first.dt());
-    }
-    if (first.frame() != keep_after + 1) return;  // keep_after is beyond the completed frames
-    std::vector<msg::Tick> kept{first};
-    for (size_t i = base + 1; i < log.size(); ++i) {
-      if (log[i].frame() > keep_after + 1) kept.push_back(log[i]);
-    }
-    log.swap(kept);
-    log_first_frame = keep_after;
+    ticklog::Trim(&log, &log_first_frame, keep_after);  // the rule replay follows (runtime/tick_log.h)
   }
 
   void SetState(RunState next) {
@@ -788,8 +777,7 @@ struct Coordinator::Impl {
     d.world_hash(barrier.WorldHash());
     d.diverged(Diverged(true));
     barrier.Close();
-    // Keep what a replay cannot infer: the first tick, ticks with commands, dt changes.
-    if (log.empty() || !open_tick.commands().empty() || open_tick.dt() != log.back().dt()) log.push_back(open_tick);
+    ticklog::Append(&log, open_tick);  // what a replay cannot infer (runtime/tick_log.h)
     TrimLog();
     done_pending = d;  // posted by PostDone, after the next tick when one follows at once
     const double us = std::chrono::duration<double, std::micro>(now - tick_sent).count();

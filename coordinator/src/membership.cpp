@@ -42,8 +42,27 @@ void Membership::SetProcessProbe(ProcessProbe probe, Clock::duration starved_tim
   starved_timeout_ = starved_timeout;
 }
 
+void Membership::Refuse(const std::string& key, const std::string& why) {
+  // Once per sender and kind: a participant that floods the topic does not flood the log.
+  if (refused_.size() < 1024 && refused_.insert(key).second) spdlog::warn("{}", why);
+}
+
 bool Membership::OnAnnounce(const msg::ServiceAnnounce& a, Clock::time_point now) {
   const std::string name = a.service().to_string();
+  if (auto it = members_.find(name); it != members_.end() && it->second.alive && it->second.pid != 0 &&
+                                     (it->second.pid != a.pid() || it->second.host != a.host().to_string())) {
+    // Another process under a live member's name: a second copy of a service, or a
+    // participant that is not one. A replacement comes once the member failed, or while its
+    // process is known gone (restarted faster than the heartbeat timeout).
+    const Member& live = it->second;
+    if ((probe_ ? probe_(live.host, live.pid) : ProcessState::kUnknown) != ProcessState::kGone) {
+      Refuse("announce " + name + " " + std::to_string(a.pid()) + "@" + a.host().to_string(),
+             "duplicate service name '" + name + "': pid " + std::to_string(a.pid()) + " on " + a.host().to_string() +
+                 " (kind '" + a.kind().to_string() + "') announced it while pid " + std::to_string(live.pid) + " on " +
+                 live.host + ", a live member, has it: ignored (service names are unique in a run)");
+      return false;
+    }
+  }
   Member& m = members_[name];
   bool changed = false;
   m.kind = a.kind().to_string();
@@ -86,8 +105,19 @@ bool Membership::OnAnnounce(const msg::ServiceAnnounce& a, Clock::time_point now
   return changed;
 }
 
-bool Membership::OnAck(const std::string& service, uint32_t current_run, const msg::Ack& a) {
-  Member& m = members_[service];
+bool Membership::OnAck(const std::string& service, uint32_t current_run, const msg::Ack& a, uint64_t newest_tick) {
+  auto found = members_.find(service);
+  if (found == members_.end()) {
+    Refuse("ack " + service, "ack of an unknown service '" + service + "' (neither required nor announced): ignored");
+    return false;
+  }
+  if (a.run() == current_run && a.frame() > newest_tick) {
+    Refuse("ack-future " + service, "ack of frame " + std::to_string(a.frame()) + " by '" + service + "' in run " +
+                                        std::to_string(current_run) + ": no tick of that frame was sent (the newest is " +
+                                        std::to_string(newest_tick) + "): ignored");
+    return false;
+  }
+  Member& m = found->second;
   bool changed = false;
   if (m.stalled_frame != 0 && a.run() == current_run && a.frame() >= m.stalled_frame) {
     m.stalled_frame = 0;  // it caught up: healthy again
@@ -123,7 +153,11 @@ bool Membership::OnAck(const std::string& service, uint32_t current_run, const m
     m.last_step_us = a.step_wall_us();
     m.replay_from = a.replay_from();
   }
-  if (!a.divergence().to_string().empty() && m.divergence != a.divergence().to_string()) {
+  if (!a.divergence().to_string().empty() && a.frame() < m.last_frame) {
+    Refuse("ack-past " + service, "ack of frame " + std::to_string(a.frame()) + " by '" + service +
+                                      "' reports a divergence but is older than its last acknowledged frame " +
+                                      std::to_string(m.last_frame) + ": ignored");
+  } else if (!a.divergence().to_string().empty() && m.divergence != a.divergence().to_string()) {
     m.divergence = a.divergence().to_string();
     spdlog::error("service '{}' diverged in run {}: {}", service, current_run, m.divergence);
     changed = true;
@@ -220,6 +254,25 @@ std::string Membership::FirstMissing(std::string* service) const {
     return it->second.failure.empty() ? "has not announced ready" : it->second.failure;
   }
   return {};
+}
+
+std::vector<std::string> Membership::Waiting(const std::string& failed, uint32_t run, uint64_t open_frame) const {
+  std::vector<std::string> out;
+  for (const auto& [name, m] : members_) {
+    if (name == failed || !m.alive || !m.required) continue;
+    if (m.run != run || m.last_frame < open_frame) out.push_back(name);
+  }
+  return out;
+}
+
+std::string Membership::FaultReason(const std::string& reason, const std::string& failed, uint32_t run,
+                                    uint64_t open_frame) const {
+  const std::vector<std::string> waiting = Waiting(failed, run, open_frame);
+  if (failed.empty() || waiting.empty()) return reason;
+  std::string names;
+  for (const auto& n : waiting) names += (names.empty() ? "" : ", ") + n;
+  return reason + "; " + names + (waiting.size() == 1 ? " waits" : " wait") + " for its replacement's outputs of frame " +
+         std::to_string(open_frame) + " (alive, not failed)";
 }
 
 const Member* Membership::Find(const std::string& service) const {

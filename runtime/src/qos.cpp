@@ -24,7 +24,7 @@ int QosHistoryDepth(QosKind kind) {
     case QosKind::kAck:
     case QosKind::kMembership: return 1;
     case QosKind::kCommand: return 256;
-    case QosKind::kState: return 4;
+    case QosKind::kState: return 256;  // the inputs of a replay, back to the last snapshot
     case QosKind::kEvent: return 64;
     case QosKind::kSensor:
     case QosKind::kImage:

@@ -11,6 +11,7 @@
 
 #include "lockstep/runtime/error.h"
 #include "lockstep/runtime/log.h"
+#include "lockstep/runtime/tick_log.h"
 
 namespace lockstep {
 
@@ -301,19 +302,9 @@ struct ServiceRunner::Impl {
   uint64_t Replay(const msg::TickLog& log, uint64_t from, uint64_t to) {
     core.replaying_ = true;
     uint64_t n = 0;
-    const auto& kept = log.ticks();
-    size_t next = 0;
-    msg::Tick tick;
-    for (uint64_t f = std::max<uint64_t>(1, log.first_frame() + 1); f <= to; ++f) {
-      if (next < kept.size() && kept[next].frame() == f) {
-        tick = kept[next++];
-      } else {  // inferred: no commands, dt unchanged
-        tick.commands({});
-        tick.frame(f);
-        tick.sim_time(tick.sim_time() + tick.dt());
-      }
-      if (f <= from) continue;
-      core.Step(tick);
+    ticklog::Cursor logged(log.ticks());
+    for (uint64_t f = std::max<uint64_t>(from, log.first_frame()) + 1; f <= to; ++f) {
+      core.Step(logged.At(f));
       ++n;
     }
     core.replaying_ = false;
@@ -369,6 +360,19 @@ ServiceRunner::ServiceRunner(Bus& bus, ServiceOptions options, ServiceCore& core
     : impl_(std::make_unique<Impl>(bus, std::move(options), core)) {
   auto& s = *impl_;
   if (s.options.name.empty()) throw InputError("a service needs a name");
+  if (s.options.snapshot_period > MaxSnapshotPeriod()) {
+    throw InputError("service '" + s.options.name + "': snapshot period " + std::to_string(s.options.snapshot_period) +
+                     " frames is longer than the " + std::to_string(MaxSnapshotPeriod()) +
+                     " frames of inputs the state topics keep for a replay");
+  }
+  // AwaitInput holds while another service's failure stops the run (no cascade).
+  core.run_faulted_by_ = [&s]() -> std::string {
+    std::lock_guard<std::mutex> lock(s.mu);
+    if (!s.status || s.status->run() != s.run || s.status->state() != msg::RunState::RUN_FAULTED) return {};
+    const std::string failed = s.status->failed_service().to_string();
+    if (failed == s.options.name) return {};
+    return failed.empty() ? std::string("the run") : failed;
+  };
   s.ack = Writer<msg::Ack>(bus, topics::kAck);
   s.announce = Writer<msg::ServiceAnnounce>(bus, topics::kService);
   s.snapshot_writer = Writer<msg::ServiceSnapshot>(bus, topics::kSnapshot);
@@ -472,6 +476,7 @@ void ServiceRunner::Run(const std::atomic<bool>& stop) {
       s.heartbeat_cv.wait_for(lock, std::chrono::duration<double>(s.options.heartbeat_period_s));
     }
   });
+  s.core.stopping_ = [&stop] { return stop.load(); };
   try {
     s.Join(stop);
     while (!stop) {
@@ -506,6 +511,7 @@ void ServiceRunner::Run(const std::atomic<bool>& stop) {
   } catch (const Stopped&) {
     // Asked to stop while waiting: a normal end.
   } catch (...) {
+    s.core.stopping_ = nullptr;
     heartbeat_stop = true;
     s.heartbeat_cv.notify_all();
     heartbeat.join();
@@ -513,9 +519,52 @@ void ServiceRunner::Run(const std::atomic<bool>& stop) {
     if (s.failed()) s.Announce(msg::ServiceState::SERVICE_STOPPING);
     throw;
   }
+  s.core.stopping_ = nullptr;
   heartbeat_stop = true;
   s.heartbeat_cv.notify_all();
   heartbeat.join();
 }
 
+uint64_t MaxSnapshotPeriod() { return static_cast<uint64_t>(QosHistoryDepth(QosKind::kState)) - 8; }
+
+namespace ticklog {
+
+msg::Tick Infer(msg::Tick from, uint64_t frame) {
+  if (from.frame() < frame) from.commands({});
+  while (from.frame() < frame) {
+    from.frame(from.frame() + 1);
+    from.sim_time(from.sim_time() + from.dt());
+  }
+  return from;
+}
+
+void Append(std::vector<msg::Tick>* log, const msg::Tick& tick) {
+  if (log->empty() || !tick.commands().empty() || tick.dt() != log->back().dt()) log->push_back(tick);
+}
+
+void Trim(std::vector<msg::Tick>* log, uint64_t* first_frame, uint64_t keep_after) {
+  if (keep_after <= *first_frame || log->empty()) return;
+  // Tick keep_after + 1 from the last logged tick at or before it, inferred as replay does.
+  size_t base = 0;
+  while (base + 1 < log->size() && (*log)[base + 1].frame() <= keep_after + 1) ++base;
+  if ((*log)[base].frame() > keep_after + 1) return;
+  msg::Tick first = Infer((*log)[base], keep_after + 1);
+  if (first.frame() != keep_after + 1) return;
+  std::vector<msg::Tick> kept{std::move(first)};
+  for (size_t i = base + 1; i < log->size(); ++i) {
+    if ((*log)[i].frame() > keep_after + 1) kept.push_back((*log)[i]);
+  }
+  log->swap(kept);
+  *first_frame = keep_after;
+}
+
+const msg::Tick& Cursor::At(uint64_t frame) {
+  while (next_ < kept_.size() && kept_[next_].frame() <= frame) tick_ = kept_[next_++];
+  if (tick_.frame() != frame) tick_ = Infer(tick_, frame);
+  return tick_;
+}
+
+}  // namespace ticklog
+
 }  // namespace lockstep
+

@@ -49,6 +49,7 @@ int RunServiceMain(int argc, char** argv, const std::string& kind, bool percepti
       try {
         ServiceOptions options{name, kind, perception};
         options.world_info_timeout_s = 10;
+        options.snapshot_period = ctx.config.snapshot_period;
         ServiceRunner runner(*bus, options, *core);
         runner.Run(g_stop);
         spdlog::info("stopping after frame {}", runner.last_frame());

@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "lockstep/coordinator/coordinator.h"
+#include "lockstep/runtime/frame_buffer.h"
 #include "lockstep/runtime/noop_core.h"
 #include "lockstep/runtime/service.h"
 #include "observer.h"
@@ -235,6 +236,70 @@ TEST_F(Recovery, ASnapshotBoundsTheTickLogAndTheReplacementReplaysOnlyFromIt) {
   const uint64_t resumed = obs_.last_frame();
   ASSERT_TRUE(WaitFrame(resumed + 5));
   EXPECT_FALSE(obs_.frames().rbegin()->second.diverged()) << Member("b")->divergence();
+}
+
+
+// Issue 21, item 3: a service waiting for the input of a failed producer used to time out,
+// fail and be restarted (the cascade that ended the full stack's run). It must wait, alive,
+// while the run is faulted, and the run status must say who waits for whom.
+class Producer : public NoopCore {
+ public:
+  Producer(Bus& bus, uint64_t fail_at) : writer_(bus, topics::kGroundState), fail_at_(fail_at) {}
+  void Step(const msg::Tick& tick) override {
+    if (tick.frame() == fail_at_) throw std::runtime_error("producer crashed");
+    NoopCore::Step(tick);
+    if (replaying()) return;
+    msg::GroundState g;
+    g.stamp().run(tick.run());
+    g.stamp().frame(tick.frame());
+    writer_.Write(g);
+  }
+
+ private:
+  Writer<msg::GroundState> writer_;
+  uint64_t fail_at_;
+};
+
+// Reads the producer's output of the frame it steps (as perception does).
+class Consumer : public NoopCore {
+ public:
+  explicit Consumer(Bus& bus) : inputs_(bus, topics::kGroundState) {}
+  bool StepNeverWaits() const override { return false; }
+  void Step(const msg::Tick& tick) override {
+    NoopCore::Step(tick);
+    if (replaying()) return;
+    auto got = AwaitInput([&](std::chrono::milliseconds slice) { return inputs_.WaitFor(tick.run(), tick.frame(), slice); },
+                          std::chrono::milliseconds(300));
+    if (!got) throw MissingInput("no input of frame " + std::to_string(tick.frame()));
+  }
+
+ private:
+  FrameBuffer<msg::GroundState> inputs_;
+};
+
+TEST_F(Recovery, AServiceWaitingForAFailedProducerWaitsAndIsNotFailed) {
+  StartCoordinator({"a", "b"});
+  auto& a = Start("a", std::make_unique<Producer>(*bus_, 30));
+  auto& b = Start("b", std::make_unique<Consumer>(*bus_));
+  ASSERT_TRUE(WaitState(msg::RunState::RUN_FAULTED));
+  EXPECT_EQ(obs_.status()->failed_service().to_string(), "a");
+  // b waits beyond its own input timeout (300 ms) for frame 30, held by the fault.
+  ASSERT_TRUE(obs_.WaitUntil([&] { return b.core->held_by_fault() || !b.Error().empty(); }, 10s));
+  EXPECT_EQ(b.Error(), "") << "the consumer failed while its producer was being replaced";
+  EXPECT_TRUE(b.core->held_by_fault());
+  EXPECT_EQ(obs_.status()->failed_service().to_string(), "a") << obs_.status()->reason();
+  EXPECT_NE(obs_.status()->reason().to_string().find("b waits for its replacement's outputs of frame 30"), std::string::npos)
+      << obs_.status()->reason();
+  auto mb = Member("b");
+  ASSERT_TRUE(mb);
+  EXPECT_TRUE(mb->alive());
+  EXPECT_EQ(mb->failure().to_string(), "");
+  // The replacement of a rebuilds its state and publishes frame 30: b goes on, the run too.
+  a.Stop();
+  Start("a", std::make_unique<Producer>(*bus_, 0));
+  ASSERT_TRUE(WaitFrame(40));
+  EXPECT_EQ(b.Error(), "");
+  EXPECT_FALSE(obs_.frames().rbegin()->second.diverged());
 }
 
 }  // namespace

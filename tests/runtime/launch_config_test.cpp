@@ -43,6 +43,15 @@ services:
   EXPECT_EQ(c.RequiredServices(), std::vector<std::string>{"air"});
 }
 
+// Issue 21: a replacement replays at most one snapshot period with the inputs the state
+// topics keep; a longer period would leave it without them.
+TEST(LaunchConfig, SnapshotPeriodIsWithinWhatTheStateTopicsKeep) {
+  EXPECT_EQ(ParseLaunchConfig("seed: 1\n", "t.yaml").snapshot_period, 200u);
+  EXPECT_EQ(ParseLaunchConfig("snapshot_period: 20\n", "t.yaml").snapshot_period, 20u);
+  EXPECT_NE(ErrorOf("snapshot_period: 249\n").find("snapshot_period"), std::string::npos);
+  EXPECT_NE(ErrorOf("snapshot_period: 0\n").find("must be 1 .. 248 frames"), std::string::npos) << ErrorOf("snapshot_period: 0\n");
+}
+
 TEST(LaunchConfig, UnknownKeyIsNamedWithItsLine) {
   const std::string e = ErrorOf("name: x\nworld:\n  fixed_delta_seconds: 0.05\n  fixed_delta_second: 0.1\n");
   EXPECT_NE(e.find("test.yaml:4"), std::string::npos) << e;

@@ -7,6 +7,7 @@
 #include <functional>
 #include <map>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -53,7 +54,12 @@ class Membership {
 
   // Each returns true when something a status report shows has changed.
   bool OnAnnounce(const msg::ServiceAnnounce& a, Clock::time_point now);
-  bool OnAck(const std::string& service, uint32_t current_run, const msg::Ack& a);
+  // Acks are refused (a warning, once per sender and kind) from a service that is neither
+  // required nor announced, for a frame of this run no tick was sent for (`newest_tick`),
+  // and a divergence reported for a frame older than the member's last; announcements of a
+  // live member's name by another process (pid, host) whose member's process is not gone.
+  bool OnAck(const std::string& service, uint32_t current_run, const msg::Ack& a,
+             uint64_t newest_tick = UINT64_MAX);
   // Its BlueprintSet arrived with `count` declarations. A member that announced READY
   // is alive only once the set it announced is here (the library must hold its blueprints).
   bool OnBlueprints(const std::string& service, long count);
@@ -73,6 +79,12 @@ class Membership {
   std::vector<std::pair<std::string, std::string>> Missing() const;
   const Member* Find(const std::string& service) const;
   const std::map<std::string, Member>& members() const { return members_; }
+  // While the run is faulted by `failed`: the live members that have not finished the open
+  // frame `open_frame` of run `run`, waiting for inputs the failed service's replacement will
+  // publish. They are not failed and must not be restarted (issue 21, no cascade).
+  std::vector<std::string> Waiting(const std::string& failed, uint32_t run, uint64_t open_frame) const;
+  // The status line of a fault: `reason`, and who waits for the failed service meanwhile.
+  std::string FaultReason(const std::string& reason, const std::string& failed, uint32_t run, uint64_t open_frame) const;
 
  private:
   std::vector<std::string> required_;
@@ -81,6 +93,8 @@ class Membership {
   Clock::duration starved_timeout_{};
   std::optional<Clock::time_point> last_check_;  // of CheckHeartbeats
   std::map<std::string, Member> members_;  // ordered by name
+  std::set<std::string> refused_;           // senders and kinds of refused samples already logged
+  void Refuse(const std::string& key, const std::string& why);
 };
 
 }  // namespace lockstep

@@ -17,7 +17,8 @@ enum class QosKind {
   kAck,         // RELIABLE, KEEP_LAST 1 per service, VOLATILE
   kMembership,  // RELIABLE, KEEP_LAST 1, TRANSIENT_LOCAL: service announcements, snapshots
   kCommand,     // RELIABLE, KEEP_LAST 256, VOLATILE: commands and replies
-  kState,       // RELIABLE, KEEP_LAST 4, TRANSIENT_LOCAL: ground / air state
+  kState,       // RELIABLE, KEEP_LAST 256, TRANSIENT_LOCAL: ground / air state, physics events (kept
+                //   for a replacement's replay: MaxSnapshotPeriod in service.h)
   kEvent,       // RELIABLE, KEEP_LAST 64, VOLATILE
   kSensor,      // RELIABLE, KEEP_LAST 2, VOLATILE: point clouds, IMU, ...
   kImage,       // RELIABLE, KEEP_LAST 2, TRANSIENT_LOCAL, preallocated, data-sharing: camera images

@@ -2,9 +2,13 @@
 // The service loop every Lockstep service runs: receive Tick k, apply its commands,
 // step, publish outputs stamped k, then Ack k. The step itself lives in a ServiceCore,
 // which never sees DDS.
+#include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <cstdint>
+#include <functional>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -40,8 +44,15 @@ struct ServiceOptions {
   double heartbeat_period_s = 0.1;   // s, how often the service re-announces itself (liveliness)
   double world_info_timeout_s = 30;  // s, how long to wait for the coordinator at start
   uint64_t snapshot_period = 200;    // frames between state snapshots (a replacement restores
-                                     // the latest, then replays the tick log from there)
+                                     // the latest, then replays the tick log from there); at
+                                     // most kMaxSnapshotPeriod: the inputs of a replay are kept
+                                     // that long (state topics' history, QosHistoryDepth(kState))
 };
+
+// The longest snapshot period whose replay the kept inputs cover: the state topics keep
+// QosHistoryDepth(QosKind::kState) frames, less a margin for the open tick and the frame
+// before it (pipelined perception reads k-1).
+uint64_t MaxSnapshotPeriod();
 
 // Implemented by each service; called on the runner's thread only.
 class ServiceCore {
@@ -75,9 +86,44 @@ class ServiceCore {
   // publish (those frames were published by the service it replaces).
   bool replaying() const { return replaying_; }
 
+ protected:
+  // Waits for one input of a step: `wait(slice)` returns the input, or nullopt when it did
+  // not come within `slice`. Gives up (nullopt) after `timeout` of waiting while the run
+  // goes on, never while the run is faulted by another service: a producer being replaced
+  // (its replacement publishes the input once it has rebuilt its state) is no reason to
+  // fail, and failing would make the consumer a second casualty (issue 21, "no cascade").
+  // The timeout starts again when the fault clears. Throws ServiceFailed when the service
+  // is asked to stop meanwhile.
+  template <class Wait>
+  auto AwaitInput(Wait&& wait, std::chrono::milliseconds timeout) -> decltype(wait(timeout)) {
+    using Steady = std::chrono::steady_clock;
+    const auto slice = std::min<std::chrono::milliseconds>(timeout, std::chrono::milliseconds(100));
+    const auto deadline = Steady::now() + timeout;
+    std::optional<Steady::time_point> fault_seen;  // last time the run was seen faulted by another service
+    for (;;) {
+      if (auto got = wait(slice)) return got;
+      const auto now = Steady::now();
+      if (run_faulted_by_ && !run_faulted_by_().empty()) {
+        if (now >= deadline) held_by_fault_ = true;  // past its timeout: held by the fault, not failed
+        fault_seen = now;
+      } else if (now >= deadline && (!fault_seen || now >= *fault_seen + timeout)) {
+        return decltype(wait(timeout))();
+      }
+      if (stopping_ && stopping_()) throw ServiceFailed("asked to stop while waiting for an input");
+    }
+  }
+
+ public:
+  // True once AwaitInput waited beyond its timeout because the run was faulted by another
+  // service (tests, diagnostics).
+  bool held_by_fault() const { return held_by_fault_; }
+
  private:
   friend class ServiceRunner;
   bool replaying_ = false;
+  std::atomic<bool> held_by_fault_{false};
+  std::function<std::string()> run_faulted_by_;  // set by the runner: who faulted the run, if not us
+  std::function<bool()> stopping_;               // set by the runner
 };
 
 class ServiceRunner {

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <map>
 #include <set>
+#include <unistd.h>
 
 #include "lockstep/runtime/command_builders.h"
 #include "lockstep/runtime/yaml_config.h"
@@ -24,6 +25,15 @@ msg::WorldSettings DefaultWorldSettings() {
   s.perception_mode(msg::PerceptionMode::PERCEPTION_STRICT);
   s.service_timeout(2.0);
   return s;
+}
+
+const HostLaunch* LaunchConfig::HostOf(const std::string& service) const {
+  auto it = service_host.find(service);
+  if (it == service_host.end()) return nullptr;
+  for (const auto& h : hosts) {
+    if (h.name == it->second) return &h;
+  }
+  return nullptr;
 }
 
 std::vector<std::string> LaunchConfig::RequiredServices() const {
@@ -78,8 +88,9 @@ msg::WorldSettings LoadWorld(YamlMap m) {
   return s;
 }
 
-ServiceLaunch LoadService(YamlMap m) {
+ServiceLaunch LoadService(YamlMap m, std::string* host) {
   ServiceLaunch s;
+  m.Get("host", host);
   m.Require("name", &s.name);
   m.Require("kind", &s.kind);
   m.Get("executable", &s.executable);
@@ -92,6 +103,39 @@ ServiceLaunch LoadService(YamlMap m) {
   }
   m.Finish();
   return s;
+}
+
+HostLaunch LoadHost(YamlMap m, const std::string& name) {
+  HostLaunch h;
+  h.name = name;
+  m.Get("address", &h.address);
+  m.Get("build_dir", &h.build_dir);
+  m.Get("config", &h.config);
+  m.Get("container", &h.container);
+  m.Get("image_prefix", &h.image_prefix);
+  m.Get("network", &h.network);
+  m.Finish();
+  const std::string where = m.where() + ": hosts." + name;
+  if (h.address.empty() == h.container.empty()) {
+    throw InputError(where + ": give either 'address' (a machine, [user@]host) or 'container' (podman or docker)");
+  }
+  if (!h.container.empty() && h.container != "podman" && h.container != "docker") {
+    throw InputError(where + ".container: must be 'podman' or 'docker', got '" + h.container + "'");
+  }
+  if (!h.container.empty() && (!h.build_dir.empty() || !h.config.empty())) {
+    throw InputError(where + ": 'build_dir' and 'config' are for a machine ('address'); a container has its image's programs and gets the config mounted");
+  }
+  if (!h.address.empty() && h.network.size() > 0) {
+    throw InputError(where + ".network: only a container host has a network");
+  }
+  return h;
+}
+
+// Names a service's `host` may give for the machine `lockstep up` runs on.
+bool IsThisMachine(const std::string& host) {
+  if (host.empty() || host == "local" || host == "localhost") return true;
+  char name[256] = {};
+  return gethostname(name, sizeof(name) - 1) == 0 && host == name;
 }
 
 msg::Vector3 Vec(YamlMap& m, const std::string& key, const YAML::Node& n) {
@@ -246,11 +290,30 @@ LaunchConfig Load(const YAML::Node& root, const std::string& where) {
   c.world = LoadWorld(m.Map("world"));
   YAML::Node services = m.Child("services");
   if (services && !services.IsSequence()) m.Fail(services, "services", "must be a list");
+  YAML::Node hosts = m.Child("hosts");
+  if (hosts && !hosts.IsMap()) m.Fail(hosts, "hosts", "must be a map of host name to {address: ...} or {container: podman|docker}");
+  for (auto it = hosts.begin(); hosts && it != hosts.end(); ++it) {
+    const std::string host = it->first.as<std::string>();
+    if (IsThisMachine(host)) m.Fail(it->first, "hosts." + host, "names this machine; services without 'host' run here");
+    c.hosts.push_back(LoadHost(YamlMap(it->second, where, "hosts." + host), host));
+  }
   std::set<std::string> names;
   for (size_t i = 0; services && i < services.size(); ++i) {
-    ServiceLaunch s = LoadService(YamlMap(services[i], where, "services[" + std::to_string(i) + "]"));
+    const std::string path = "services[" + std::to_string(i) + "]";
+    std::string host;
+    ServiceLaunch s = LoadService(YamlMap(services[i], where, path), &host);
     if (!names.insert(s.name).second) {
-      m.Fail(services[i], "services[" + std::to_string(i) + "].name", "'" + s.name + "' is used twice");
+      m.Fail(services[i], path + ".name", "'" + s.name + "' is used twice");
+    }
+    if (!IsThisMachine(host)) {
+      if (std::none_of(c.hosts.begin(), c.hosts.end(), [&](const HostLaunch& h) { return h.name == host; })) {
+        std::string known;
+        for (const auto& h : c.hosts) known += (known.empty() ? "" : ", ") + h.name;
+        m.Fail(services[i]["host"], path + ".host",
+               "unknown host '" + host + "' (" + (known.empty() ? "no `hosts:` in this config" : "hosts: " + known) +
+                   "; 'local' or no host = this machine)");
+      }
+      c.service_host[s.name] = host;
     }
     c.services.push_back(std::move(s));
   }
@@ -271,6 +334,18 @@ LaunchConfig Load(const YAML::Node& root, const std::string& where) {
       std::none_of(c.services.begin(), c.services.end(), [](const ServiceLaunch& s) { return s.kind == "recorder"; }) &&
       !names.count("recorder")) {
     c.services.push_back({"recorder", "recorder", "", {}, true, true, "never"});
+  }
+  // `ros2: true` (or LOCKSTEP_ROS2=1, which `lockstep up --ros2` sets for itself and its
+  // children): the ROS 2 view of the run, as CARLA's server started with --ros2
+  // (docs/deployment.md#ros-2). A required member, so the run never moves past a frame the
+  // ROS 2 topics have not shown.
+  m.Get("ros2", &c.ros2);
+  if (const char* env = std::getenv("LOCKSTEP_ROS2"); env != nullptr && std::string(env) == "1") c.ros2 = true;
+  if (c.ros2 && std::none_of(c.services.begin(), c.services.end(), [](const ServiceLaunch& s) { return s.kind == "ros2_bridge"; })) {
+    if (names.count("ros2_bridge")) {
+      throw InputError(where + ": ros2: the service name 'ros2_bridge' is taken by a service of another kind");
+    }
+    c.services.push_back({"ros2_bridge", "ros2_bridge", "", {}, true, true, "never"});
   }
   m.Finish();
   if (c.domain_id < 0 || c.domain_id > 232) {

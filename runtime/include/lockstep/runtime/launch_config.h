@@ -2,6 +2,7 @@
 // The launch config: which services make up a simulation and how the world runs.
 // Loaded from YAML (deploy/configs/*.yaml); unknown keys and bad values are errors
 // that name the key and line.
+#include <map>
 #include <string>
 #include <vector>
 
@@ -30,6 +31,19 @@ struct ScheduledCommand {
   msg::Command command;        // client "scenario"
 };
 
+// A machine (or container engine) that runs some of the services (`hosts:`); a service
+// names it in `host:`. `lockstep up` starts only the services of this machine and prints
+// the command that starts each of the others where it runs (docs/deployment.md).
+struct HostLaunch {
+  std::string name;         // the key under `hosts:`
+  std::string address;      // ssh destination ([user@]host): run the program there
+  std::string build_dir;    // the build on that host (its bin/ holds the programs); default: this build's
+  std::string config;       // the launch config's path on that host; default: this config's path
+  std::string container;    // podman | docker: run the service as a container of its image instead
+  std::string image_prefix = "localhost/lockstep/";  // the service's image is <image_prefix><kind>
+  std::string network;      // container network (default: the engine's)
+};
+
 struct LaunchConfig {
   std::string source = "(built-in)";  // file it came from, for messages
   std::string name = "lockstep";
@@ -45,8 +59,13 @@ struct LaunchConfig {
   msg::WorldSettings world = DefaultWorldSettings();
   std::vector<ServiceLaunch> services;
   std::vector<ScheduledCommand> scenario;  // sorted by frame, stable
+  std::vector<HostLaunch> hosts;           // `hosts:` in file order
+  std::map<std::string, std::string> service_host;  // service name -> a name of `hosts` (absent: this machine)
+  bool ros2 = false;                       // `ros2: true` (or LOCKSTEP_ROS2=1): the run has a ros2_bridge service
 
   std::vector<std::string> RequiredServices() const;
+  // The host entry a service runs on; nullptr for this machine.
+  const HostLaunch* HostOf(const std::string& service) const;
 };
 
 // The build directory: $LOCKSTEP_BUILD_DIR, else the one the running program was built

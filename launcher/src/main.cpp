@@ -22,6 +22,7 @@
 #include <optional>
 
 #include "lockstep/runtime/command_builders.h"
+#include "lockstep/runtime/domain_lock.h"
 #include "lockstep/runtime/error.h"
 #include "lockstep/runtime/launch_config.h"
 #include "lockstep/runtime/log.h"
@@ -57,6 +58,8 @@ int Up(const std::string& config_file, int domain, bool with_coordinator) {
   if (with_coordinator) setenv("LOCKSTEP_DEFAULT_RECORDER", "1", 1);
   lockstep::LaunchConfig config = lockstep::LoadLaunchConfig(config_file);
   if (domain >= 0) config.domain_id = domain;
+  // One simulation per domain on this host: a second `lockstep up` is refused with who holds it.
+  lockstep::HoldSimulationDomain(config.domain_id, "lockstep up " + config_file + " ('" + config.name + "')");
   const std::string bin = BinDir();
   const std::string dom = std::to_string(config.domain_id);
   std::vector<lockstep::ChildSpec> children;

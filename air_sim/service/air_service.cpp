@@ -1,12 +1,16 @@
 #include "air_service.h"
 
 #include <algorithm>
+#include <cstring>
 #include <sstream>
+#include <type_traits>
+#include <utility>
 
 #include "lockstep/map/map.h"
 #include "lockstep/map/scene.h"
 #include "lockstep/map/scene_mesh.h"
 #include "lockstep/runtime/error.h"
+#include "lockstep/runtime/hash.h"
 
 #include "lockstep/runtime/log.h"
 
@@ -80,6 +84,130 @@ Move PathMove(const msg::DroneCommand& d) {
   return m;
 }
 
+
+// ---- snapshots (a replacement process restores them) ----
+// Values in order, as their bytes: plain values (arithmetic, enums, Eigen's fixed-size
+// vectors and the structs made of them: nothing owned), vectors, strings and maps of them.
+// One build's representation: a snapshot goes to a replacement of the same program.
+template <class T>
+struct IsVector : std::false_type {};
+template <class T>
+struct IsVector<std::vector<T>> : std::true_type {};
+template <class T>
+struct IsMap : std::false_type {};
+template <class K, class V>
+struct IsMap<std::map<K, V>> : std::true_type {};
+
+struct SnapOut {
+  std::vector<uint8_t> bytes;
+  template <class T>
+  void One(const T& v) {
+    if constexpr (IsVector<T>::value) {
+      One(static_cast<uint64_t>(v.size()));
+      for (const auto& e : v) One(e);
+    } else if constexpr (IsMap<T>::value) {
+      One(static_cast<uint64_t>(v.size()));
+      for (const auto& [k, e] : v) {
+        One(k);
+        One(e);
+      }
+    } else if constexpr (std::is_same_v<T, std::string>) {
+      One(static_cast<uint64_t>(v.size()));
+      bytes.insert(bytes.end(), v.begin(), v.end());
+    } else {
+      static_assert(std::is_trivially_destructible_v<T> && !std::is_pointer_v<T>, "a plain value");
+      const auto* p = reinterpret_cast<const uint8_t*>(&v);
+      bytes.insert(bytes.end(), p, p + sizeof v);
+    }
+  }
+  template <class... T>
+  void operator()(const T&... v) {
+    (One(v), ...);
+  }
+};
+
+struct SnapIn {
+  const std::vector<uint8_t>& bytes;
+  size_t at = 0;
+  void Need(uint64_t n) const {
+    if (n > bytes.size() - at) throw InputError("air_sim: the snapshot is truncated");
+  }
+  template <class T>
+  void One(T& v) {
+    if constexpr (IsVector<T>::value) {
+      uint64_t n = 0;
+      One(n);
+      Need(n);  // at least a byte each: a bad count cannot allocate without bound
+      v.assign(n, typename T::value_type{});
+      for (auto& e : v) One(e);
+    } else if constexpr (IsMap<T>::value) {
+      uint64_t n = 0;
+      One(n);
+      Need(n);
+      v.clear();
+      for (uint64_t i = 0; i < n; ++i) {
+        typename T::key_type k{};
+        typename T::mapped_type e{};
+        One(k);
+        One(e);
+        v.emplace(std::move(k), std::move(e));
+      }
+    } else if constexpr (std::is_same_v<T, std::string>) {
+      uint64_t n = 0;
+      One(n);
+      Need(n);
+      v.assign(reinterpret_cast<const char*>(bytes.data() + at), n);
+      at += n;
+    } else {
+      static_assert(std::is_trivially_destructible_v<T> && !std::is_pointer_v<T>, "a plain value");
+      Need(sizeof v);
+      std::memcpy(static_cast<void*>(&v), bytes.data() + at, sizeof v);
+      at += sizeof v;
+    }
+  }
+  template <class... T>
+  void operator()(T&... v) {
+    (One(v), ...);
+  }
+};
+
+// One list of fields for both directions (D: DroneState or const DroneState).
+template <class Ar, class D>
+void DroneFields(Ar& ar, D& s) {
+  ar(s.id, s.position, s.orientation, s.velocity, s.angular_velocity, s.acceleration, s.angular_acceleration, s.rotors,
+     s.total_thrust, s.armed, s.api_control, s.unsteered, s.landed, s.grounded, s.carrier, s.carrier_offset, s.carrier_yaw,
+     s.last_support_time, s.support_velocity, s.collision, s.touching, s.controller, s.gust, s.rng, s.reset_count);
+  auto& c = s.command;
+  ar(c.id, c.mode, c.running, c.start_time, c.end_time, c.path, c.path_s, c.path_vmax, c.s, c.s_dot, c.segment, c.speed,
+     c.lookahead, c.adaptive_lookahead, c.velocity, c.target, c.landed_since);
+}
+
+template <class Ar, class B>
+void BodyFields(Ar& ar, B& body) {
+  std::visit(
+      [&](auto& m) {
+        using M = std::decay_t<decltype(m)>;
+        if constexpr (std::is_same_v<M, air::cmd::MoveOnPath>) {
+          ar(m.path, m.velocity, m.timeout, m.drivetrain, m.yaw_mode, m.lookahead, m.adaptive_lookahead);
+        } else if constexpr (std::is_same_v<M, air::cmd::MoveByMotorPwms>) {
+          ar(m.pwm, m.duration);
+        } else {
+          ar(m);
+        }
+      },
+      body);
+}
+
+template <size_t... I>
+air::CommandBody BodyOfIndex(size_t index, std::index_sequence<I...>) {
+  air::CommandBody out;
+  bool known = false;
+  ((index == I ? (out.emplace<I>(), known = true) : false), ...);
+  if (!known) throw InputError("air_sim: the snapshot names an unknown command kind");
+  return out;
+}
+
+constexpr uint32_t kSnapshotVersion = 1;
 }  // namespace
 
 std::optional<air::CommandBody> ToAirCommand(const msg::DroneCommand& d, std::string* why) {
@@ -197,7 +325,8 @@ AirService::AirService(Bus& bus, std::string name)
     : name_(std::move(name)),
       state_writer_(bus, topics::kAirState),
       event_writer_(bus, topics::kEvent),
-      ground_(bus, topics::kGroundState),
+      // The vehicles of the frames the state topic keeps: a replacement replays from them.
+      ground_(bus, topics::kGroundState, static_cast<size_t>(QosHistoryDepth(QosKind::kState))),
       declarations_(bus),
       physics_writer_(bus, topics::kPhysicsEvents),
       map_reader_(bus, topics::kMap, [this](const msg::MapData& m, const SampleInfo&) {
@@ -251,6 +380,7 @@ void AirService::BeginRun(const msg::WorldInfo& world) {
   state_ = air::MakeState(model_);
   blueprints_.clear();
   last_command_.clear();
+  spawn_attributes_.clear();
   api_wind_.setZero();
   wind_intensity_ = world.weather().wind_intensity();
   input_timeout_s_ = world.settings().service_timeout() > 0 ? world.settings().service_timeout() : 10.0;
@@ -269,6 +399,71 @@ void AirService::BeginRun(const msg::WorldInfo& world) {
   spdlog::info("run {}: seed {}, vehicles {}", world.run(), world.seed(),
                wait_for_ground_ ? "from " + ground.front() + "'s GroundState (frame k-1)"
                                 : std::string("none (no member declares vehicles or walkers)"));
+}
+
+// The service's state: the drones (spawn attributes and pose rebuild each model; the state
+// itself field by field), and what the adapter keeps beside them: blueprints, each drone's
+// last command status, simSetWind's wind and the weather's wind intensity.
+std::vector<uint8_t> AirService::SaveState() const {
+  SnapOut out;
+  out(kSnapshotVersion, state_.frame, state_.time, static_cast<uint64_t>(model_.drones.size()));
+  for (size_t i = 0; i < model_.drones.size(); ++i) {
+    const air::DroneModel& m = model_.drones[i];
+    auto a = spawn_attributes_.find(m.id);
+    out(m.id, a == spawn_attributes_.end() ? std::map<std::string, std::string>{} : a->second, m.spawn);
+    DroneFields(out, state_.drones[i]);
+    out(static_cast<uint64_t>(state_.drones[i].command.body.index()));
+    BodyFields(out, state_.drones[i].command.body);
+  }
+  out(blueprints_, last_command_, api_wind_, wind_intensity_);
+  return std::move(out.bytes);
+}
+
+void AirService::RestoreState(const std::vector<uint8_t>& bytes) {
+  SnapIn in{bytes};
+  uint32_t version = 0;
+  uint64_t frame = 0, drones = 0;
+  double time = 0;
+  in(version);
+  if (version != kSnapshotVersion) throw InputError("air_sim: snapshot version " + std::to_string(version) + " is not this build's");
+  in(frame, time, drones);
+  in.Need(drones);
+  model_.drones.clear();
+  state_ = air::MakeState(model_);
+  spawn_attributes_.clear();
+  for (uint64_t i = 0; i < drones; ++i) {
+    uint32_t id = 0;
+    std::map<std::string, std::string> attrs;
+    air::Pose spawn;
+    in(id, attrs, spawn);
+    air::AddDrone(&model_, &state_, id, air::ParamsFromAttributes(attrs), spawn);
+    spawn_attributes_[id] = std::move(attrs);
+    air::DroneState& d = *state_.Find(id);
+    DroneFields(in, d);
+    uint64_t index = 0;
+    in(index);
+    d.command.body = BodyOfIndex(index, std::make_index_sequence<std::variant_size_v<air::CommandBody>>{});
+    BodyFields(in, d.command.body);
+  }
+  state_.frame = frame;
+  state_.time = time;
+  in(blueprints_, last_command_, api_wind_, wind_intensity_);
+  if (in.at != bytes.size()) throw InputError("air_sim: the snapshot has trailing bytes");
+}
+
+// The drones' state (air::StateHash) and what the adapter keeps that changes later steps or
+// what it publishes: simSetWind's wind, the weather's wind intensity, each drone's last
+// command id and status, and its blueprint.
+uint64_t AirService::StateHash() const {
+  Fnv1a64 h;
+  h.Add(air::StateHash(state_));
+  for (int i = 0; i < 3; ++i) h.Add(api_wind_[i]);
+  h.Add(wind_intensity_);
+  h.Add<uint64_t>(last_command_.size());
+  for (const auto& [drone, c] : last_command_) h.Add(drone).Add(c.first).Add(static_cast<int32_t>(c.second));
+  h.Add<uint64_t>(blueprints_.size());
+  for (const auto& [drone, bp] : blueprints_) h.Add(drone).Add(std::string_view(bp));
+  return h.value();
 }
 
 void AirService::Fail(const msg::FrameStamp& stamp, uint32_t actor, const std::string& why) {
@@ -308,6 +503,7 @@ void AirService::Apply(const msg::Command& c, uint64_t frame, air::Commands* out
         air::AddDrone(&model_, &state_, s.actor(), air::ParamsFromAttributes(attrs), ToPose(s.transform()));
         state_.Find(s.actor())->api_control = api_control;
         blueprints_[s.actor()] = bp;
+        spawn_attributes_[s.actor()] = attrs;
       } catch (const std::exception& e) {
         Fail(stamp, s.actor(), std::string("spawn failed: ") + e.what());
       }
@@ -317,6 +513,7 @@ void AirService::Apply(const msg::Command& c, uint64_t frame, air::Commands* out
       if (air::RemoveDrone(&model_, &state_, b.destroy_actor().actor())) {
         blueprints_.erase(b.destroy_actor().actor());
         last_command_.erase(b.destroy_actor().actor());
+        spawn_attributes_.erase(b.destroy_actor().actor());
       }
       return;
     case msg::CommandKind::CMD_SET_TRANSFORM:
@@ -394,7 +591,8 @@ std::vector<air::VehicleBox> AirService::Vehicles(const msg::Tick& tick) {
   // Jacobi coupling: the vehicles of frame k-1 while stepping to frame k. Never step without
   // them: a missing input faults the run (the coordinator restarts or reports it).
   const auto timeout = std::chrono::milliseconds(static_cast<int64_t>(input_timeout_s_ * 1000));
-  auto ground = ground_.WaitFor(tick.run(), tick.frame() - 1, timeout);
+  // A ground service being replaced holds the wait (AwaitInput): no cascade of failures.
+  auto ground = AwaitInput([&](std::chrono::milliseconds slice) { return ground_.WaitFor(tick.run(), tick.frame() - 1, slice); }, timeout);
   if (!ground) {
     throw InputError(name_ + ": no GroundState of frame " + std::to_string(tick.frame() - 1) + " within " +
                      std::to_string(input_timeout_s_) + " s; a missing input faults the run");
@@ -428,15 +626,17 @@ void AirService::Step(const msg::Tick& tick) {
   air::Commands commands;
   for (const auto& c : tick.commands()) Apply(c, tick.frame(), &commands);
   air::Step(model_, &state_, commands, Environment(std::move(vehicles)), tick.dt());
+  for (const auto& r : state_.reports) {
+    // Id 0: a command of no client's future (set_transform, enableApiControl), which must not
+    // look like the end of the drone's running command. Part of the state: also in a replay.
+    if (r.id != 0) last_command_[r.drone] = {r.id, ToWire(r.status)};
+  }
   if (replaying()) return;  // a replacement rebuilding past frames: they were published already
   msg::FrameStamp stamp;
   stamp.run(tick.run());
   stamp.frame(tick.frame());
   stamp.sim_time(tick.sim_time());
   for (const auto& r : state_.reports) {
-    // Id 0: a command of no client's future (set_transform, enableApiControl), which must not
-    // look like the end of the drone's running command.
-    if (r.id != 0) last_command_[r.drone] = {r.id, ToWire(r.status)};
     if (r.status == air::CommandStatus::kRejected) Fail(stamp, r.drone, "command " + std::to_string(r.id) + " rejected: " + r.message);
   }
   for (const auto& e : state_.events) {
@@ -483,7 +683,7 @@ void AirService::PublishPhysicsEvents(const msg::FrameStamp& stamp) {
 msg::AirState AirService::Publish(const msg::FrameStamp& stamp) const {
   msg::AirState out;
   out.stamp(stamp);
-  out.state_hash(air::StateHash(state_));
+  out.state_hash(StateHash());
   std::vector<msg::DroneState> drones;
   drones.reserve(state_.drones.size());
   for (size_t i = 0; i < state_.drones.size(); ++i) {

@@ -22,7 +22,9 @@ class AirService final : public ServiceCore {
   explicit AirService(Bus& bus, std::string name = "air_sim");
   void BeginRun(const msg::WorldInfo& world) override;
   void Step(const msg::Tick& tick) override;
-  uint64_t StateHash() const override { return air::StateHash(state_); }
+  uint64_t StateHash() const override;
+  std::vector<uint8_t> SaveState() const override;
+  void RestoreState(const std::vector<uint8_t>& state) override;
   std::vector<msg::BlueprintDeclaration> Blueprints() const override { return AirBlueprints(); }
   std::string CheckSpawn(const msg::SpawnActor& spawn) const override { return CheckAirSpawn(spawn); }
   // Without a vehicle/walker simulator in the run the step reads only the tick: it may run on the
@@ -58,6 +60,7 @@ class AirService final : public ServiceCore {
   air::World model_;
   air::WorldState state_;
   std::map<uint32_t, std::string> blueprints_;
+  std::map<uint32_t, std::map<std::string, std::string>> spawn_attributes_;  // per drone: rebuilds its model on restore
   std::map<uint32_t, std::pair<uint64_t, msg::DroneCommandStatus>> last_command_;  // per drone
   std::vector<msg::SimEvent> pending_events_;
   Writer<msg::PhysicsEvents> physics_writer_;

@@ -151,11 +151,11 @@ namespace {
 
 using namespace std::chrono_literals;
 
-// air_sim killed mid-flight and replaced: the replacement rebuilds its drones by replaying
-// the run's ticks, and the run ends in exactly the state of a run that was never interrupted.
+// air_sim killed mid-flight and replaced: the replacement restores its last snapshot and
+// replays the run's ticks after it, and the run ends in exactly the state of a run that was never interrupted.
 std::string AirConfig(int domain) {
   return "domain_id: " + std::to_string(domain) +
-         "\nparticipant_profile: lockstep.participant.loopback\nseed: 11\nticks: 300\n"
+         "\nparticipant_profile: lockstep.participant.loopback\nseed: 11\nticks: 300\nsnapshot_period: 50\n"
          "world:\n  real_time_factor: 4\n  service_timeout: 5\n"
          "services:\n  - {name: air_sim, kind: air_sim}\n"
          "scenario:\n"
@@ -179,6 +179,8 @@ TEST(AirReplacement, ReplayRestoresTheRunBitForBit) {
   const uint64_t recovered = FinalWorldHash(true, &log);
   ASSERT_NE(reference, 0u);
   EXPECT_NE(log.find("matches"), std::string::npos) << "the replacement did not verify its replay:\n" << log;
+  // Issue 21: from its snapshot (every 50 frames here, the drone mid-move), not from frame 1.
+  EXPECT_NE(log.find("restored the snapshot of frame 100"), std::string::npos) << log;
   EXPECT_EQ(recovered, reference) << "the interrupted run must end in the same state";
 }
 

@@ -2,10 +2,14 @@
 
 #include <algorithm>
 #include <condition_variable>
+#include <cstdlib>
 #include <ctime>
 #include <filesystem>
+#include <functional>
 #include <optional>
+#include <stdexcept>
 #include <thread>
+#include <tuple>
 
 #include "lockstep/runtime/actor_list.h"
 #include "lockstep/runtime/error.h"
@@ -85,6 +89,7 @@ struct Recorder::Hashes {
                         auto& h = done[d.frame()];
                         h.world_hash = d.world_hash();
                         h.diverged = d.diverged();
+                        done_max = std::max(done_max, d.frame());
                         while (done.size() > 64) done.erase(done.begin());
                       }
                       cv.notify_all();
@@ -104,10 +109,19 @@ struct Recorder::Hashes {
     std::lock_guard<std::mutex> lock(mu);
     done.clear();
     acks.clear();
+    done_max = 0;
     run = r;
     expected = required;
   }
   size_t expected = 0;  // acks per frame: the required services
+  uint64_t done_max = 0;  // the latest FrameDone of the run (Take keeps no record of it)
+
+  // Waits (bounded) until FrameDone of `frame` or a later one came: every member acked it,
+  // so every sensor output of that tick has been published.
+  void WaitDoneAtLeast(uint64_t frame, Ms timeout) {
+    std::unique_lock<std::mutex> lock(mu);
+    cv.wait_for(lock, timeout, [&] { return done_max >= frame; });
+  }
 
   // FrameDone of `frame` is here with every required service's ack (an ack may reach this
   // reader after FrameDone reached the other: different writers).
@@ -166,8 +180,199 @@ struct Recorder::Inputs {
         actor_reader(bus, topics::kActors, [this](const msg::ActorList& l, const SampleInfo&) {
           std::lock_guard<std::mutex> lock(mu);
           if (l.run() != run) return;
+          listed.clear();  // the list is every live actor
           for (const auto& a : l.actors()) listed[a.spawn().actor()] = a.spawn();
         }) {}
+};
+
+namespace {
+
+std::string Attribute(const msg::SpawnActor& s, const char* key) {
+  for (const auto& a : s.attributes()) {
+    if (a.key().to_string() == key) return a.value().to_string();
+  }
+  return {};
+}
+std::string RoleName(const msg::SpawnActor& s) { return Attribute(s, "role_name"); }
+
+// Sensors that publish only when something happens (a collision, a crossed marking, an
+// obstacle, a V2X message): never waited for.
+bool EventType(const std::string& type) {
+  return type == "CollisionEvent" || type == "LaneInvasionEvent" || type == "ObstacleDetection" || type == "V2XData";
+}
+
+}  // namespace
+
+// The chosen sensors' outputs of one log. Readers on the shared sensor topics that the
+// selection may need exist from the log's start (a sample of a sensor this recorder has
+// not sorted yet is kept until it is); a chosen camera gets readers on its own image
+// topics when it is sorted (they keep the last images, so its first one comes too). Each
+// sample is kept as published until the writer thread takes it for the frame it shows;
+// samples of sensors not chosen are dropped unread.
+//
+// The bus may deliver a sample after the frame's FrameDone (another topic, another
+// thread), so the writer waits, bounded, for the samples due: a chosen sensor that
+// publishes every frame (sensor_tick 0) is due in every frame after the one it was
+// sorted in; one with a sensor_tick, from its third sample on, at its last frame plus the
+// frames between its last two. A sensor that misses its due frame is not waited for again
+// until it published twice more; event sensors never are.
+struct Recorder::SensorTaps {
+  using Key = std::tuple<uint64_t, uint32_t, std::string>;  // frame, sensor, type
+  Bus& bus;
+  const uint32_t run;
+  const uint64_t first_frame;  // the log's first state frame: older samples are not the log's
+  const recorder::SensorSelection selection;
+  std::mutex mu;
+  std::condition_variable cv;
+  std::set<uint32_t> chosen, ignored;
+  std::set<uint32_t> alive;  // sensors alive in the frame the Step thread last saw
+  std::map<Key, std::function<std::vector<uint8_t>()>> pending;  // the sample's CDR, made off the bus thread
+  std::map<std::pair<uint32_t, std::string>, uint64_t> last_taken;  // per stream: no sample twice
+  struct Due {
+    uint64_t previous = 0, last = 0;  // frames of its last two samples (last: or when it was sorted)
+    uint64_t period = 0;              // frames between its samples; 0: not waited for
+    bool events = false;
+  };
+  std::map<uint32_t, Due> due;  // chosen sensors
+  uint64_t newest = 0;
+  std::vector<std::shared_ptr<void>> readers;  // Step thread only
+
+  SensorTaps(Bus& b, uint32_t r, uint64_t first, recorder::SensorSelection s)
+      : bus(b), run(r), first_frame(first), selection(std::move(s)) {}
+  ~SensorTaps() { readers.clear(); }  // no callback after this
+
+  template <class T>
+  void Keep(const T& s, const char* type) {
+    if (s.stamp().run() != run || s.stamp().frame() < first_frame) return;
+    const uint32_t id = s.sensor();
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      if (ignored.count(id)) return;
+    }
+    auto copy = std::make_shared<T>(s);
+    std::lock_guard<std::mutex> lock(mu);
+    const uint64_t frame = s.stamp().frame();
+    pending[Key{frame, id, type}] = [copy] { return recorder::ToCdr(*copy); };
+    newest = std::max(newest, frame);
+    // A sample nobody takes (its sensor never sorted) does not stay for long.
+    while (!pending.empty() && std::get<0>(pending.begin()->first) + 64 < newest) pending.erase(pending.begin());
+    cv.notify_all();
+  }
+
+  template <class T>
+  void Subscribe(const std::string& topic, QosKind qos, const char* type) {
+    readers.push_back(std::make_shared<Reader<T>>(bus, Topic<T>{topic.c_str(), qos},
+                                                  [this, type](const T& s, const SampleInfo&) { Keep(s, type); }));
+  }
+  template <class T>
+  void Subscribe(const Topic<T>& topic, const char* type) {
+    Subscribe<T>(topic.name, topic.qos, type);
+  }
+
+  // The shared topics of these message types (SensorMessageType).
+  void SubscribeShared(const std::set<std::string>& types) {
+    auto want = [&](const char* t) { return types.count(t) > 0; };
+    if (want("PointCloud")) Subscribe(topics::kPointCloud, "PointCloud");
+    if (want("RadarScan")) Subscribe(topics::kRadar, "RadarScan");
+    if (want("Imu")) Subscribe(topics::kImu, "Imu");
+    if (want("Gnss")) Subscribe(topics::kGnss, "Gnss");
+    if (want("Barometer")) Subscribe(topics::kBarometer, "Barometer");
+    if (want("Magnetometer")) Subscribe(topics::kMagnetometer, "Magnetometer");
+    if (want("CollisionEvent")) Subscribe(topics::kCollision, "CollisionEvent");
+    if (want("LaneInvasionEvent")) Subscribe(topics::kLaneInvasion, "LaneInvasionEvent");
+    if (want("ObstacleDetection")) Subscribe(topics::kObstacle, "ObstacleDetection");
+    if (want("DistanceMeasurement")) Subscribe(topics::kDistance, "DistanceMeasurement");
+    if (want("V2XData")) Subscribe(topics::kV2X, "V2XData");
+  }
+
+  // Sorts a sensor once, in the Step of `frame` (its state frame): chosen or not. A
+  // chosen camera gets its image readers.
+  void Sort(uint32_t id, const msg::SpawnActor& spawn, uint64_t frame) {
+    const std::string blueprint = spawn.blueprint().to_string();
+    const bool choose = selection.Chooses(id, blueprint, RoleName(spawn));
+    const std::string type = recorder::SensorMessageType(blueprint);
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      if (chosen.count(id) || ignored.count(id)) return;
+      (choose ? chosen : ignored).insert(id);
+      if (choose) {
+        Due& d = due[id];
+        d.events = EventType(type);
+        d.last = std::max(first_frame, frame);
+        const std::string tick = Attribute(spawn, "sensor_tick");
+        if (!d.events && (tick.empty() || std::strtod(tick.c_str(), nullptr) <= 0)) d.period = 1;
+      }
+    }
+    // Outside the lock: a new reader may deliver kept images at once.
+    if (choose && type == "Image") {
+      Subscribe<msg::Image>(topics::ImageTopicName(id), QosKind::kImage, "Image");
+      Subscribe<msg::LargeImage>(topics::LargeImageTopicName(id), QosKind::kLargeImage, "LargeImage");
+    }
+  }
+
+  void SetAlive(std::set<uint32_t> ids) {
+    std::lock_guard<std::mutex> lock(mu);
+    alive = std::move(ids);
+  }
+
+  // The chosen sensors due by `up_to` whose sample is not here yet (mu held).
+  std::vector<uint32_t> Missing(uint64_t up_to) const {
+    std::vector<uint32_t> out;
+    for (const auto& [id, d] : due) {
+      if (d.period == 0 || !alive.count(id) || d.last + d.period > up_to) continue;
+      bool here = false;
+      for (auto it = pending.lower_bound(Key{d.last + 1, 0, std::string()}); it != pending.end() && std::get<0>(it->first) <= up_to && !here; ++it) {
+        here = std::get<1>(it->first) == id;
+      }
+      if (!here) out.push_back(id);
+    }
+    return out;
+  }
+
+  // Waits until the samples due by `up_to` are here, or `deadline`.
+  void WaitDue(uint64_t up_to, std::chrono::steady_clock::time_point deadline) {
+    std::unique_lock<std::mutex> lock(mu);
+    if (cv.wait_until(lock, deadline, [&] { return Missing(up_to).empty(); })) return;
+    for (uint32_t id : Missing(up_to)) {
+      spdlog::warn("recorder: sensor {} published nothing for frame {}: not waited for until it publishes twice more", id, up_to);
+      due[id].period = 0;
+      due[id].previous = 0;
+    }
+  }
+
+  // The samples of chosen sensors that show frames up to `up_to`, as CDR, in (frame,
+  // sensor) order; one that came after its frame was written comes with a later frame.
+  std::vector<recorder::SensorRecord> Take(uint64_t up_to) {
+    std::vector<std::pair<Key, std::function<std::vector<uint8_t>()>>> ready;
+    {
+      std::lock_guard<std::mutex> lock(mu);
+      for (auto it = pending.begin(); it != pending.end() && std::get<0>(it->first) <= up_to;) {
+        const auto& [frame, id, type] = it->first;
+        auto last = last_taken.find({id, type});
+        if (ignored.count(id) || (last != last_taken.end() && frame <= last->second)) {
+          it = pending.erase(it);
+          continue;
+        }
+        if (!chosen.count(id)) {  // its spawn has not been sorted yet: it may still be
+          ++it;
+          continue;
+        }
+        last_taken[{id, type}] = frame;
+        Due& d = due[id];
+        if (frame > d.last) {
+          if (!d.events && d.period == 0 && d.previous != 0) d.period = frame - d.last;  // learnt from two samples
+          d.previous = d.last;
+          d.last = frame;
+        }
+        ready.emplace_back(it->first, std::move(it->second));
+        it = pending.erase(it);
+      }
+    }
+    std::vector<recorder::SensorRecord> out;
+    out.reserve(ready.size());
+    for (auto& [key, cdr] : ready) out.push_back(recorder::SensorRecord{std::get<1>(key), std::get<2>(key), cdr(), std::get<0>(key)});
+    return out;
+  }
 };
 
 Recorder::Recorder(Bus& bus, RecorderOptions options)
@@ -182,10 +387,16 @@ Recorder::Recorder(Bus& bus, RecorderOptions options)
   if (options_.record_run && options_.output_dir.empty()) {
     throw InputError("recorder: recording every run needs output_dir in the launch config");
   }
+  try {
+    sensor_selection_ = recorder::SensorSelection::Parse(options_.record_sensors);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(std::string("recorder: --record-sensors: ") + e.what());
+  }
   writer_thread_ = std::thread([this] { WriterLoop(); });
 }
 
 Recorder::~Recorder() {
+  closing_ = true;  // the writer waits for no FrameDone any more
   try {
     Stop("service stopped");
   } catch (const std::exception& e) {
@@ -298,6 +509,25 @@ void Recorder::Start(const msg::Tick& tick, const std::string& path, bool additi
   h.start_unix_time = static_cast<int64_t>(std::time(nullptr));
   h.additional_data = additional_data;
   h.keyframe_period = options_.keyframe_period;
+  // The sensors whose outputs it holds: the recorder's selection, else every sensor when
+  // start_recorder asks for additional_data.
+  const recorder::SensorSelection chosen =
+      !sensor_selection_.empty() ? sensor_selection_ : (additional_data ? recorder::SensorSelection::All() : recorder::SensorSelection());
+  h.sensor_selection = chosen.spec();
+  std::shared_ptr<SensorTaps> taps;
+  if (!chosen.empty()) {
+    taps = std::make_shared<SensorTaps>(bus_, tick.run(), PerceptionFrame(mode_, tick.frame()), chosen);
+    std::set<std::string> types;
+    for (const auto& [bp, kind] : inputs->kinds) {
+      if (kind == msg::ActorKind::ACTOR_SENSOR && chosen.MayChoose(bp)) types.insert(recorder::SensorMessageType(bp));
+    }
+    taps->SubscribeShared(types);
+    for (const auto& [id, s] : alive_) {
+      const std::string bp = s.blueprint().to_string();
+      auto k = inputs->kinds.find(bp);
+      if (k != inputs->kinds.end() && k->second == msg::ActorKind::ACTOR_SENSOR && chosen.Chooses(id, bp, RoleName(s))) h.sensors.push_back(id);
+    }
+  }
   if (prelude_complete_ && tick.frame() > 1) {
     h.prelude = prelude_;
     h.prelude_frames = tick.frame() - 1;
@@ -309,6 +539,7 @@ void Recorder::Start(const msg::Tick& tick, const std::string& path, bool additi
     return;
   }
   inputs_ = std::move(inputs);
+  taps_ = std::move(taps);
   described_.clear();
   queued_ = 0;
   hashes_->StartAt(tick.frame());
@@ -333,6 +564,7 @@ void Recorder::Stop(const std::string& reason) {
   writer_->Close(reason, late);
   writer_.reset();
   inputs_.reset();
+  taps_.reset();
   spdlog::info("recorder: {} ({} frames, {})", path, frames, reason);
 }
 
@@ -436,7 +668,34 @@ void Recorder::WriteFrame(const msg::Tick& tick) {
   for (const auto& a : job.air) {
     for (const auto& d : a.drones()) listed(d.actor());
   }
+  if (taps_) {
+    ChooseSensors(*taps_, state_frame);
+    job.sensors = taps_;
+  }
   Enqueue(std::move(job));
+}
+
+void Recorder::ChooseSensors(SensorTaps& taps, uint64_t state_frame) {
+  Inputs& in = *inputs_;
+  auto sort = [&](uint32_t id, const msg::SpawnActor& s) {
+    const std::string bp = s.blueprint().to_string();
+    auto k = in.kinds.find(bp);
+    const bool sensor = k != in.kinds.end() ? k->second == msg::ActorKind::ACTOR_SENSOR : bp.rfind("sensor.", 0) == 0;
+    if (sensor) taps.Sort(id, s, state_frame);
+  };
+  for (const auto& [id, s] : alive_) sort(id, s);
+  std::map<uint32_t, msg::SpawnActor> listed;
+  {
+    std::lock_guard<std::mutex> lock(in.mu);
+    for (const auto& [id, s] : in.listed) {
+      if (!alive_.count(id)) listed.emplace(id, s);
+    }
+  }
+  for (const auto& [id, s] : listed) sort(id, s);
+  std::set<uint32_t> alive;
+  for (const auto& [id, s] : alive_) alive.insert(id);
+  for (const auto& [id, s] : listed) alive.insert(id);
+  taps.SetAlive(std::move(alive));
 }
 
 void Recorder::Enqueue(Job job) {
@@ -478,6 +737,14 @@ void Recorder::WriterLoop() {
         if (it == job.described.end()) return std::nullopt;
         return it->second;
       };
+      if (job.sensors) {
+        // FrameDone of the frame: every member acked it, so its sensors published their
+        // outputs (the service loop publishes before it acks).
+        const auto deadline = std::chrono::steady_clock::now() + Ms(closing_ ? 500 : 3000);
+        if (!closing_) hashes_->WaitDoneAtLeast(job.tick.frame(), Ms(1000));
+        job.sensors->WaitDue(job.state_frame, deadline);
+        f.sensors = job.sensors->Take(job.state_frame);
+      }
       writer_->WriteFrame(f);
       ++frames_written_;
       write_us_ = write_us_ + std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - t0).count();

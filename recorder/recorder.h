@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "lockstep/recorder/log_writer.h"
+#include "lockstep/recorder/sensor_selection.h"
 #include "lockstep/runtime/declarations.h"
 #include "lockstep/runtime/service.h"
 
@@ -38,6 +39,10 @@ struct RecorderOptions {
   std::map<std::string, std::pair<std::string, bool>> service_kinds;  // name -> (kind, perception), from the config
   uint32_t keyframe_period = 200;
   size_t prelude_limit_bytes = 64u << 20;  // earlier ticks kept for a mid-run start (CDR bytes)
+  // Sensors whose outputs every log of this recorder holds (recorder/sensor_selection.h:
+  // "all", ids, role_name=NAME, blueprint patterns); "" = none, unless a start_recorder
+  // asks for additional_data, which records every sensor.
+  std::string record_sensors;
 };
 
 class Recorder final : public ServiceCore {
@@ -57,6 +62,7 @@ class Recorder final : public ServiceCore {
  private:
   struct Inputs;
   struct Hashes;
+  struct SensorTaps;
   // One frame for the writer thread.
   struct Job {
     msg::Tick tick;
@@ -67,6 +73,7 @@ class Recorder final : public ServiceCore {
     std::vector<std::pair<uint64_t, recorder::FrameHashes>> hashes;
     std::vector<uint32_t> stateless;
     std::map<uint32_t, recorder::ActorInfo> described;  // first seen in this frame
+    std::shared_ptr<SensorTaps> sensors;  // the chosen sensors' outputs (null: none recorded)
   };
   static constexpr size_t kQueue = 8;  // frames the writer may lag behind
   void Enqueue(Job job);
@@ -76,6 +83,8 @@ class Recorder final : public ServiceCore {
   void Stop(const std::string& reason);
   void Track(const msg::Tick& tick);
   void WriteFrame(const msg::Tick& tick);
+  // Sorts the sensors of the run into chosen and not (cameras chosen get their readers).
+  void ChooseSensors(SensorTaps& taps, uint64_t state_frame);
 
   Bus& bus_;
   RecorderOptions options_;
@@ -85,6 +94,8 @@ class Recorder final : public ServiceCore {
   std::unique_ptr<recorder::LogWriter> writer_;
   std::unique_ptr<Inputs> inputs_;  // the state readers, only while recording
   std::unique_ptr<Hashes> hashes_;  // FrameDone and acks (kept only while recording)
+  recorder::SensorSelection sensor_selection_;  // options_.record_sensors
+  std::shared_ptr<SensorTaps> taps_;  // the chosen sensors' readers, while a log records any
   // What every tick of the run said, kept while not recording (cheap: spawns and commands).
   std::map<uint32_t, msg::SpawnActor> alive_;     // live spawned actors by id
   std::vector<msg::Tick> prelude_;                // ticks with commands or a new dt
@@ -104,6 +115,7 @@ class Recorder final : public ServiceCore {
   std::thread writer_thread_;
   std::atomic<uint64_t> frames_written_{0};
   std::atomic<double> write_us_{0};
+  std::atomic<bool> closing_{false};  // the service ends: no more waiting for FrameDone
   mutable std::mutex announce_mu_;
   std::map<std::string, std::pair<std::string, bool>> announced_;  // name -> (kind, perception)
   Reader<msg::ServiceAnnounce> announce_reader_;

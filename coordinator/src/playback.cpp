@@ -5,6 +5,7 @@
 #include <iomanip>
 #include <sstream>
 
+#include "lockstep/runtime/command_builders.h"
 #include "lockstep/runtime/error.h"
 #include "lockstep/runtime/log.h"
 
@@ -84,59 +85,6 @@ std::string Num(double v) {
   std::ostringstream s;
   s << v;
   return s.str();
-}
-
-msg::CommandBody TransformBody(uint32_t actor, const msg::Pose& pose) {
-  msg::SetTransform t;
-  t.actor(actor);
-  t.transform(pose);
-  msg::CommandBody b;
-  b.set_transform(t);
-  return b;
-}
-
-msg::CommandBody PhysicsBody(uint32_t actor, bool on) {
-  msg::ActorPhysicsCommand p;
-  p.actor(actor);
-  p.kind(msg::ActorPhysicsKind::PHYSICS_SET_SIMULATE_PHYSICS);
-  p.enabled(on);
-  msg::CommandBody b;
-  b.actor_physics(p);
-  return b;
-}
-
-msg::CommandBody AutopilotBody(uint32_t actor, bool on) {
-  msg::TrafficManagerCommand t;
-  t.parameter(msg::TrafficManagerParameter::TM_AUTOPILOT);
-  t.actor(actor);
-  t.value(on ? 1 : 0);
-  msg::CommandBody b;
-  b.traffic_manager(t);
-  return b;
-}
-
-msg::CommandBody VehicleLightsBody(uint32_t actor, uint32_t bits) {
-  msg::ActorPhysicsCommand p;
-  p.actor(actor);
-  p.kind(msg::ActorPhysicsKind::PHYSICS_SET_LIGHT_STATE);
-  p.light_state(bits);
-  msg::CommandBody b;
-  b.actor_physics(p);
-  return b;
-}
-
-msg::CommandBody LightBody(uint32_t actor, msg::TrafficLightColor state, bool freeze) {
-  msg::TrafficLightCommand l;
-  l.actor(actor);
-  l.action(msg::TrafficLightAction::LIGHT_SET);
-  l.state(state);
-  l.green_time(-1);
-  l.yellow_time(-1);
-  l.red_time(-1);
-  l.freeze(freeze);
-  msg::CommandBody b;
-  b.traffic_light(l);
-  return b;
 }
 
 }  // namespace
@@ -277,7 +225,7 @@ void Playback::SpawnActor(const PlaybackActor& a, const msg::Pose& at, const Pla
     targets_.insert(a.id);
     kinds_[a.id] = a.kind;
     if (vehicle) {
-      submit(PhysicsBody(a.id, false));
+      submit(SimulatePhysicsBody(a.id, false));
       submit(AutopilotBody(a.id, false));
     }
     return;
@@ -311,7 +259,7 @@ void Playback::SpawnActor(const PlaybackActor& a, const msg::Pose& at, const Pla
   targets_.insert(id);
   spawned_.insert(id);
   kinds_[id] = a.kind;
-  if (vehicle) submit(PhysicsBody(id, false));
+  if (vehicle) submit(SimulatePhysicsBody(id, false));
 }
 
 void Playback::Destroy(uint32_t log_id, const PlaybackSubmit& submit) {
@@ -372,11 +320,11 @@ void Playback::Finish(bool keep_actors, bool destroy_spawned, const PlaybackSubm
     if (kinds_[id] != msg::ActorKind::ACTOR_VEHICLE) continue;
     if (ignore_hero_ && heroes_.count(log_id)) continue;
     if (!blueprint_of(id)) continue;
-    submit(PhysicsBody(id, true));
+    submit(SimulatePhysicsBody(id, true));
     if (keep_actors) submit(AutopilotBody(id, true));
   }
   for (const auto& [id, state] : lights_set_) {
-    if (blueprint_of(id)) submit(LightBody(id, state, false));
+    if (blueprint_of(id)) submit(TrafficLightBody(id, state, false));
   }
   lights_set_.clear();
   replay_.reset();
@@ -484,7 +432,7 @@ void Playback::Tick(double dt, const PlaybackSubmit& submit, const BlueprintOf& 
     if (!bp || !StartsWith(*bp, "traffic.")) continue;  // the map's lights keep their ids on the same map
     auto it = lights_set_.find(l.id);
     if (it != lights_set_.end() && it->second == l.state) continue;
-    if (submit(LightBody(l.id, l.state, true)).accepted()) lights_set_[l.id] = l.state;
+    if (submit(TrafficLightBody(l.id, l.state, true)).accepted()) lights_set_[l.id] = l.state;
   }
   r.now = t + dt * time_factor_;
   if (t >= r.stop - kTimeEpsilon) natural_end_ = true;  // CARLA: the frame at the stop time is shown, then it stops

@@ -3,10 +3,12 @@
 #include <CLI/CLI.hpp>
 #include <unistd.h>
 
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 #include <thread>
 
@@ -15,6 +17,7 @@
 #include "lockstep/recorder/log_reader.h"
 #include "lockstep/recorder/log_writer.h"
 #include "lockstep/recorder/resimulate.h"
+#include "lockstep/recorder/sensor_export.h"
 #include "lockstep/runtime/error.h"
 #include "lockstep/runtime/launch_config.h"
 #include "progress.h"
@@ -75,6 +78,35 @@ int Info(const std::string& name, bool carla, bool all) {
   std::printf("actors    ");
   for (const auto& [k, n] : kinds) std::printf(" %d %s", n, k.c_str());
   std::printf("\n");
+  // The recorded sensor outputs: per sensor, then per message type, with their size.
+  const auto& stats = log.sensor_stats();
+  const double hours = log.duration() > 0 ? log.duration() / 3600 : 0;
+  auto per_hour = [&](uint64_t bytes) { return hours > 0 ? static_cast<double>(bytes) / 1e6 / hours : 0.0; };
+  if (h.sensor_selection.empty() && stats.empty()) {
+    std::printf("sensors    none recorded\n");
+    return 0;
+  }
+  uint64_t total = 0;
+  for (const auto& st : stats) total += st.bytes;
+  std::printf("sensors    selection '%s': %zu sensors with outputs, %.3f MB (%.1f MB per simulated hour)\n", h.sensor_selection.c_str(),
+              stats.size(), static_cast<double>(total) / 1e6, per_hour(total));
+  std::map<std::string, std::array<uint64_t, 3>> types;  // type -> sensors, samples, bytes
+  for (const auto& st : stats) {
+    auto it = log.actors().find(st.sensor);
+    std::printf("  sensor %u %s (%s): %llu samples, frames %llu..%llu, %.3f MB, %.1f kB per sample\n", st.sensor,
+                it == log.actors().end() ? "?" : it->second.blueprint.c_str(), st.type.c_str(), static_cast<unsigned long long>(st.samples),
+                static_cast<unsigned long long>(st.first_frame), static_cast<unsigned long long>(st.last_frame),
+                static_cast<double>(st.bytes) / 1e6, st.samples ? static_cast<double>(st.bytes) / 1e3 / static_cast<double>(st.samples) : 0.0);
+    auto& t = types[st.type];
+    ++t[0];
+    t[1] += st.samples;
+    t[2] += st.bytes;
+  }
+  for (const auto& [type, t] : types) {
+    std::printf("  %s: %llu sensors, %llu samples, %.3f MB, %.1f kB per sample, %.1f MB per simulated hour\n", type.c_str(),
+                static_cast<unsigned long long>(t[0]), static_cast<unsigned long long>(t[1]), static_cast<double>(t[2]) / 1e6,
+                t[1] ? static_cast<double>(t[2]) / 1e3 / static_cast<double>(t[1]) : 0.0, per_hour(t[2]));
+  }
   return 0;
 }
 
@@ -308,9 +340,14 @@ int LogCommand(const std::vector<std::string>& args, const std::atomic<bool>& st
   blocked->add_option("log", name, "log file")->required();
   blocked->add_option("--min-time", min_time, "s an actor must stand")->capture_default_str();
   blocked->add_option("--min-distance", min_distance, "cm it may move meanwhile")->capture_default_str();
-  auto* exp = app.add_subcommand("export", "the log as CSV files (frames, actors, air_state, events)");
+  auto* exp = app.add_subcommand("export", "the log as CSV files (frames, actors, air_state, events) and its recorded sensor outputs as files");
   exp->add_option("log", name, "log file")->required();
-  exp->add_option("--csv", csv_dir, "folder for the CSV files")->required();
+  exp->add_option("--csv", csv_dir, "folder for the CSV files");
+  std::string sensors_dir, points_format = "ply";
+  std::vector<uint32_t> sensor_ids;
+  exp->add_option("--sensors", sensors_dir, "folder for the recorded sensor outputs (camera PNG/npy, LiDAR PLY/npy, CSV)");
+  exp->add_option("--points", points_format, "LiDAR files: ply or npy")->check(CLI::IsMember({"ply", "npy"}))->capture_default_str();
+  exp->add_option("--sensor", sensor_ids, "only these sensor ids (repeat the option)");
   auto* replay = app.add_subcommand("replay", "re-simulate a log: its ticks re-drive the services, every world hash compared");
   replay->add_option("log", name, "log file")->required();
   replay->add_flag("--resimulate", resimulate, "re-drive the real services (playback: carla.Client.replay_file)");
@@ -344,10 +381,33 @@ int LogCommand(const std::vector<std::string>& args, const std::atomic<bool>& st
       return 0;
     }
     if (exp->parsed()) {
+      if (csv_dir.empty() && sensors_dir.empty()) {
+        std::fprintf(stderr, "lockstep log export: give --csv DIR, --sensors DIR or both\n");
+        return 2;
+      }
       LogReader log(recorder::ResolveLogPath(name));
-      WriteCsv(log, csv_dir);
-      std::printf("wrote frames.csv, actors.csv, air_state.csv and events.csv of %llu frames into %s\n",
-                  static_cast<unsigned long long>(log.frame_count()), csv_dir.c_str());
+      if (!csv_dir.empty()) {
+        WriteCsv(log, csv_dir);
+        std::printf("wrote frames.csv, actors.csv, air_state.csv and events.csv of %llu frames into %s\n",
+                    static_cast<unsigned long long>(log.frame_count()), csv_dir.c_str());
+      }
+      if (!sensors_dir.empty()) {
+        recorder::SensorExportOptions eo;
+        eo.points = points_format;
+        eo.sensors = sensor_ids;
+        WorkProgress progress("export sensors", log.frame_count());
+        const auto r = recorder::ExportSensors(log, sensors_dir, eo, [&](uint64_t done, uint64_t) { progress.Update(done, 0); });
+        progress.Done();
+        std::string by;
+        for (const auto& [type, n] : r.by_type) {
+          if (!by.empty()) by += ", ";
+          by += std::to_string(n);
+          by += ' ';
+          by += type;
+        }
+        std::printf("wrote %llu sensor samples (%s) into %llu files under %s\n", static_cast<unsigned long long>(r.samples),
+                    by.empty() ? "the log has none" : by.c_str(), static_cast<unsigned long long>(r.files), sensors_dir.c_str());
+      }
       return 0;
     }
     if (replay->parsed()) {

@@ -109,6 +109,7 @@ struct LogReader::Impl {
   std::vector<double> sim_times;      // by frame - first
   std::vector<uint64_t> keyframes;    // frames, ascending
   std::map<uint64_t, FrameHashes> late_hashes;  // from the footer
+  std::vector<SensorStats> sensor_stats;        // by sensor id
   uint64_t first = 0;
   uint64_t frames_start = 0;  // offset of the first frame record
   bool truncated = true;
@@ -214,6 +215,7 @@ struct LogReader::Impl {
     header.position_quantum = h.position_quantum();
     header.angle_quantum = h.angle_quantum();
     header.sensors.assign(h.sensors().begin(), h.sensors().end());
+    header.sensor_selection = h.sensor_selection();
     header.prelude_frames = h.prelude_frames();
   }
 
@@ -232,6 +234,9 @@ struct LogReader::Impl {
       actors[a.id] = std::move(a);
     }
     for (const auto& h : f.hashes()) late_hashes[h.frame()] = FromProto(h, header.services);
+    for (const auto& st : f.sensor_stats()) {
+      sensor_stats.push_back(SensorStats{st.sensor(), st.type(), st.samples(), st.bytes(), st.first_frame(), st.last_frame()});
+    }
   }
 
   // No footer: every whole record in turn, up to the first one cut short.
@@ -239,6 +244,7 @@ struct LogReader::Impl {
     log::Record r;
     uint64_t next = 0;
     std::set<uint32_t> alive;
+    std::map<uint32_t, SensorStats> stats;
     while (ReadRecord(at, &r, &next)) {
       if (r.has_footer()) break;
       if (!r.has_frame()) break;
@@ -256,8 +262,21 @@ struct LogReader::Impl {
       }
       for (uint32_t d : f.destroyed()) alive.erase(d);
       for (uint32_t id : alive) actors[id].last_frame = f.frame();
+      for (const auto& s : f.sensors()) {
+        SensorStats& st = stats[s.sensor()];
+        if (st.samples == 0) {
+          st.sensor = s.sensor();
+          st.type = s.type();
+          st.first_frame = s.frame();
+        }
+        ++st.samples;
+        st.bytes += s.cdr().size();
+        st.first_frame = std::min(st.first_frame, s.frame());
+        st.last_frame = std::max(st.last_frame, s.frame());
+      }
       at = next;
     }
+    for (auto& [id, st] : stats) sensor_stats.push_back(std::move(st));
     if (!offsets.empty() && (keyframes.empty() || keyframes.front() != first)) Fail("damaged: the first frame is not a keyframe");
   }
 
@@ -435,7 +454,7 @@ struct LogReader::Impl {
     out->infractions.clear();
     for (const auto& i : f.infractions()) out->infractions.push_back(InfractionRecord{i.actor(), static_cast<Infraction>(i.kind()), i.count()});
     out->sensors.clear();
-    for (const auto& s : f.sensors()) out->sensors.push_back(SensorRecord{s.sensor(), s.type(), {s.cdr().begin(), s.cdr().end()}});
+    for (const auto& s : f.sensors()) out->sensors.push_back(SensorRecord{s.sensor(), s.type(), {s.cdr().begin(), s.cdr().end()}, s.frame()});
     out->hashes.reset();
   }
 
@@ -487,6 +506,7 @@ bool LogReader::truncated() const { return impl_->truncated; }
 std::string LogReader::stop_reason() const { return impl_->stop_reason; }
 uint64_t LogReader::file_size() const { return impl_->size; }
 uint64_t LogReader::header_bytes() const { return impl_->frames_start; }
+const std::vector<SensorStats>& LogReader::sensor_stats() const { return impl_->sensor_stats; }
 
 double LogReader::SimTime(uint64_t frame) const {
   if (impl_->offsets.empty() || frame < impl_->first || frame > impl_->last()) {

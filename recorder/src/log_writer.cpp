@@ -118,6 +118,7 @@ struct LogWriter::Impl {
   // Every actor of the log, for the footer.
   std::map<uint32_t, log::ActorInfo> actors;
   std::unordered_map<uint32_t, std::pair<uint64_t, uint64_t>> actor_frames;
+  std::map<uint32_t, SensorStats> sensor_stats;  // for the footer
   std::string buffer;
 
   void Write(const log::Record& r) {
@@ -177,6 +178,7 @@ LogWriter::LogWriter(const std::string& path, const LogHeader& header) : impl_(s
   h->set_position_quantum(kPositionQuantum);
   h->set_angle_quantum(kAngleQuantum);
   for (uint32_t s : header.sensors) h->add_sensors(s);
+  h->set_sensor_selection(header.sensor_selection);
   for (const auto& t : header.prelude) {
     const auto b = ToCdr(t);
     h->add_prelude_ticks_cdr(b.data(), b.size());
@@ -410,6 +412,17 @@ void LogWriter::WriteFrame(const FrameInputs& in) {
     o->set_sensor(s.sensor);
     o->set_type(s.type);
     o->set_cdr(s.cdr.data(), s.cdr.size());
+    o->set_frame(s.frame);
+    SensorStats& st = m.sensor_stats[s.sensor];
+    if (st.samples == 0) {
+      st.sensor = s.sensor;
+      st.type = s.type;
+      st.first_frame = s.frame;
+    }
+    ++st.samples;
+    st.bytes += s.cdr.size();
+    st.first_frame = std::min(st.first_frame, s.frame);
+    st.last_frame = std::max(st.last_frame, s.frame);
   }
 
   const uint64_t at = m.offset;
@@ -457,6 +470,15 @@ void LogWriter::Close(const std::string& reason, const std::vector<std::pair<uin
     f->add_actor_last_frame(m.actor_frames[id].second);
   }
   for (double t : m.sim_times) f->add_sim_times(t);
+  for (const auto& [id, st] : m.sensor_stats) {
+    auto* o = f->add_sensor_stats();
+    o->set_sensor(id);
+    o->set_type(st.type);
+    o->set_samples(st.samples);
+    o->set_bytes(st.bytes);
+    o->set_first_frame(st.first_frame);
+    o->set_last_frame(st.last_frame);
+  }
   const uint64_t at = m.offset;
   m.Write(r);
   uint8_t trailer[16];

@@ -36,6 +36,70 @@ msg::CommandBody SpawnBody(const std::string& blueprint, const msg::Pose& pose, 
   return b;
 }
 
+msg::CommandBody TransformBody(uint32_t actor, const msg::Pose& pose) {
+  msg::SetTransform t;
+  t.actor(actor);
+  t.transform(pose);
+  msg::CommandBody b;
+  b.set_transform(t);
+  return b;
+}
+
+namespace {
+msg::CommandBody PhysicsBody(uint32_t actor, msg::ActorPhysicsKind kind, bool enabled, uint32_t light_state) {
+  msg::ActorPhysicsCommand p;
+  p.actor(actor);
+  p.kind(kind);
+  p.enabled(enabled);
+  p.light_state(light_state);
+  msg::CommandBody b;
+  b.actor_physics(p);
+  return b;
+}
+}  // namespace
+
+msg::CommandBody SimulatePhysicsBody(uint32_t actor, bool on) {
+  return PhysicsBody(actor, msg::ActorPhysicsKind::PHYSICS_SET_SIMULATE_PHYSICS, on, 0);
+}
+
+msg::CommandBody VehicleLightsBody(uint32_t actor, uint32_t light_state) {
+  return PhysicsBody(actor, msg::ActorPhysicsKind::PHYSICS_SET_LIGHT_STATE, false, light_state);
+}
+
+msg::CommandBody AutopilotBody(uint32_t actor, bool on) {
+  msg::TrafficManagerCommand t;
+  t.parameter(msg::TrafficManagerParameter::TM_AUTOPILOT);
+  t.actor(actor);
+  t.value(on ? 1 : 0);
+  msg::CommandBody b;
+  b.traffic_manager(t);
+  return b;
+}
+
+msg::CommandBody TrafficLightBody(uint32_t actor, msg::TrafficLightColor state, bool freeze) {
+  msg::TrafficLightCommand l;
+  l.actor(actor);
+  l.action(msg::TrafficLightAction::LIGHT_SET);
+  l.state(state);
+  l.green_time(-1);
+  l.yellow_time(-1);
+  l.red_time(-1);
+  l.freeze(freeze);
+  msg::CommandBody b;
+  b.traffic_light(l);
+  return b;
+}
+
+msg::CommandBody RecorderBody(msg::RecorderAction action, const std::string& name, bool flag) {
+  msg::RecorderCommand r;
+  r.action(action);
+  r.name(name);
+  r.flag(flag);
+  msg::CommandBody b;
+  b.recorder(r);
+  return b;
+}
+
 const char* RunStateName(msg::RunState state) {
   switch (state) {
     case msg::RunState::RUN_WAITING_FOR_SERVICES: return "waiting for services";

@@ -54,7 +54,8 @@ struct LogHeader {
   uint32_t keyframe_period = 0;
   double position_quantum = 0.001;  // m
   double angle_quantum = 1e-4;      // rad
-  std::vector<uint32_t> sensors;    // sensor actors whose outputs are recorded
+  std::vector<uint32_t> sensors;    // chosen sensors alive at the first frame (sensor_stats(): all)
+  std::string sensor_selection;     // what chose them: --record-sensors, "all" (additional_data), "" none
   std::vector<msg::Tick> prelude;   // the run's earlier ticks with commands (mid-run start)
   uint64_t prelude_frames = 0;      // frames 1..prelude_frames precede the log's first frame
 };
@@ -129,10 +130,23 @@ struct FrameHashes {
   std::vector<std::pair<std::string, uint64_t>> services;  // (service, state hash), name order
 };
 
+// One output of a recorded sensor, as published: the message bit for bit as CDR
+// (lockstep::recorder::FromCdr<msg::Image> etc., log_writer.h).
 struct SensorRecord {
   uint32_t sensor = 0;
-  std::string type;           // message type name, e.g. "Imu"
-  std::vector<uint8_t> cdr;   // the sample, CDR (lockstep::recorder::FromCdr in log_writer.h)
+  std::string type;           // message type name: "Image", "LargeImage", "PointCloud", "Imu", ...
+  std::vector<uint8_t> cdr;   // the sample, CDR
+  uint64_t frame = 0;         // the frame it shows (its stamp)
+};
+
+// What a log holds of one sensor.
+struct SensorStats {
+  uint32_t sensor = 0;
+  std::string type;
+  uint64_t samples = 0;
+  uint64_t bytes = 0;         // CDR bytes
+  uint64_t first_frame = 0;   // frames its first and last samples show
+  uint64_t last_frame = 0;
 };
 
 // A frame with the full state of every actor (deltas applied).
@@ -151,6 +165,8 @@ struct LogFrame {
   std::vector<LaneInvasionRecord> lane_invasions;
   std::vector<InfractionRecord> infractions;
   std::optional<FrameHashes> hashes;  // FrameDone of this frame (none if the run stopped first)
+  // The chosen sensors' outputs that show this frame's state frame (and any that reached the
+  // recorder after their own frame was written: see SensorRecord::frame).
   std::vector<SensorRecord> sensors;
   const ActorState* Find(uint32_t id) const;
 };
@@ -180,6 +196,8 @@ class LogReader {
   std::string stop_reason() const;  // the footer's ("stopped", "run ended", ...); "" if truncated
   uint64_t file_size() const;       // bytes
   uint64_t header_bytes() const;    // bytes before the first frame (magic and header)
+  // Every sensor with recorded outputs, by id (from the footer; a truncated log: its scan).
+  const std::vector<SensorStats>& sensor_stats() const;
 
   // Frame `frame` (first_frame() .. last_frame()) with every actor's state: reads from the
   // keyframe at or before it (at most keyframe_period records). Throws LogError outside.

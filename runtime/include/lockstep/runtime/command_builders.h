@@ -1,5 +1,6 @@
 #pragma once
-// Small builders for the wire types clients send most: poses and spawn requests.
+// Small builders for the wire types clients send most: poses, spawn requests and the
+// bodies of one-actor commands.
 #include <string>
 #include <utility>
 #include <vector>
@@ -15,6 +16,17 @@ msg::Pose MakePose(double x, double y, double z, double yaw = 0);
 std::vector<msg::BlueprintAttribute> MakeAttributes(const AttributeList& attributes);
 msg::CommandBody SpawnBody(const std::string& blueprint, const msg::Pose& pose, const AttributeList& attributes = {},
                            uint32_t parent = 0);
+
+// Bodies of the one-actor commands that playback, scenarios, benchmarks and tests send.
+msg::CommandBody TransformBody(uint32_t actor, const msg::Pose& pose);     // set_transform (world ENU)
+msg::CommandBody SimulatePhysicsBody(uint32_t actor, bool on);            // set_simulate_physics
+msg::CommandBody AutopilotBody(uint32_t actor, bool on);                  // Traffic Manager autopilot
+msg::CommandBody VehicleLightsBody(uint32_t actor, uint32_t light_state); // carla.VehicleLightState bits
+// A traffic light's state (its green/yellow/red times kept), frozen there or running again.
+msg::CommandBody TrafficLightBody(uint32_t actor, msg::TrafficLightColor state, bool freeze);
+// The recorder's and replayer's commands: name = log file (start_recorder, replay_file),
+// flag by action (additional_data, keep_actors, ...).
+msg::CommandBody RecorderBody(msg::RecorderAction action, const std::string& name = "", bool flag = false);
 
 // Human-readable run state ("running", "faulted", ...).
 const char* RunStateName(msg::RunState state);

@@ -163,6 +163,57 @@ def test_plotted_shapes_live_as_unreals_draw_debug():
         assert dt < _plot_life(d, False, dt) <= 2 * dt
 
 
+def _encoded(it, arr, as_float=False):
+    from lockstep.airsim.client import _encode
+    r = airsim.ImageResponse()
+    r.pixels_as_float, r.compress = as_float, False
+    _encode(r, it, arr)
+    return r
+
+
+def test_optical_flow_is_airsims():
+    """AirSim's optical flow material: (current - previous) clip position / 2, so the motion as a
+    fraction of the image, x right, y up; its float read-back keeps the R channel (vx) only, its
+    byte read-back clamps to 0..1 (x 255.999, truncated), B G R. The render's flow is CARLA's:
+    x right, y down, [-2, 2] spans the image."""
+    import numpy as np
+    f = np.zeros((2, 3, 2), np.float32)
+    f[0, 0] = (0.4, -0.6)     # right by a fifth of the width, up by 0.3 of the height
+    f[0, 1] = (-0.4, 0.6)     # left and down
+    r = _encoded(airsim.ImageType.OpticalFlow, f, as_float=True)
+    assert len(r.image_data_float) == 6
+    assert r.image_data_float[:3] == [pytest.approx(0.2), pytest.approx(-0.2), 0.0]
+    b = np.frombuffer(_encoded(airsim.ImageType.OpticalFlow, f).image_data_uint8, np.uint8).reshape(2, 3, 3)
+    assert b[0, 0].tolist() == [0, 76, 51] and b[0, 1].tolist() == [0, 0, 0] and b[1, 2].tolist() == [0, 0, 0]
+    # Vis: hue 180 deg + the angle, value log(|v| + 0.999) / log(1.099): right cyan, left red,
+    # up (180 + 90 deg) violet, down yellow-green; no motion black; B G R bytes.
+    f = np.zeros((1, 5, 2), np.float32)
+    f[0, 0], f[0, 1], f[0, 2], f[0, 3] = (0.4, 0), (-0.4, 0), (0, -0.4), (0, 0.4)
+    v = np.frombuffer(_encoded(airsim.ImageType.OpticalFlowVis, f).image_data_uint8, np.uint8).reshape(5, 3).tolist()
+    assert v == [[255, 255, 0], [0, 0, 255], [255, 0, 128], [0, 255, 128], [0, 0, 0]]
+    # A small motion is dim: |v| = 0.01 of the image.
+    f = np.zeros((1, 1, 2), np.float32)
+    f[0, 0] = (0.02, 0)
+    g = np.frombuffer(_encoded(airsim.ImageType.OpticalFlowVis, f).image_data_uint8, np.uint8).tolist()
+    assert g == [24, 24, 0]   # 255.999 x log(1.009) / log(1.099), truncated
+
+
+def test_surface_normals_are_unreals_world_normals():
+    """AirSim's NormalsMaterial: Unreal's world normal (X north, Y east, Z up) as (n + 1) / 2,
+    whatever the camera looks at (AirSim issues 2047 and 2813): an upward face is (127, 127, 255)
+    RGB from any camera; the render gives camera-frame normals."""
+    import numpy as np
+    from lockstep.airsim.client import _airsim_normals
+    view_up, towards = [128, 255, 128, 255], [255, 128, 128, 255]   # B G R A of (0, 1, 0) and (0, 0, 1)
+    level_north = airsim.to_quaternion(0, 0, 0)
+    down = airsim.to_quaternion(-math.pi / 2, 0, 0)
+    east = airsim.to_quaternion(0, 0, math.pi / 2)
+    px = np.array([[view_up, towards, towards, [0, 0, 0, 0]]], np.uint8)
+    assert _airsim_normals(px, level_north).tolist()[0][:2] == [[255, 127, 127], [127, 127, 0]]   # ground; a wall facing south
+    assert _airsim_normals(px, down).tolist()[0][1] == [255, 127, 127]         # the ground seen from above
+    assert _airsim_normals(px, east).tolist()[0][2:] == [[127, 0, 127], [0, 0, 0]]   # a wall facing west; the sky
+
+
 def test_pfm_round_trip(tmp_path):
     import numpy as np
     img = np.arange(12, dtype=np.float32).reshape(3, 4)

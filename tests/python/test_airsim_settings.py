@@ -242,6 +242,53 @@ def test_api_control_is_the_vehicles_across_processes(client):
     assert float(out[4]) < 0.02   # m: neither move steered the drone
 
 
+def test_surface_normals_are_world_normals_from_any_camera(client):
+    """AirSim's SurfaceNormals are Unreal's world normals (X north, Y east, Z up) as (n + 1) / 2:
+    the flat ground is (127, 127, 255) RGB seen from the front camera and from the one looking down."""
+    if not has_service('render'):
+        pytest.skip('needs render')
+    import airsim
+    _lift(client)
+    reqs = [airsim.ImageRequest('0', airsim.ImageType.SurfaceNormals, False, False),
+            airsim.ImageRequest('probe', airsim.ImageType.SurfaceNormals, False, False)]
+    client.simGetImages(reqs, 'Drone1')   # spawns the cameras
+    client._client.tick()
+    front, down = client.simGetImages(reqs, 'Drone1')
+    f = np.frombuffer(front.image_data_uint8, np.uint8).reshape(front.height, front.width, 3)
+    patch = f[-6:, front.width // 2 - 8:front.width // 2 + 8].reshape(-1, 3)   # the ground 18 m ahead
+    assert (patch == (255, 127, 127)).all(axis=1).mean() > 0.8
+    d = np.frombuffer(down.image_data_uint8, np.uint8).reshape(down.height, down.width, 3)
+    assert tuple(int(v) for v in d[down.height // 2, down.width // 2]) == (255, 127, 127)
+
+
+def test_optical_flow_of_a_yawing_drone_is_airsims(client):
+    """Yawing right (NED, clockwise from above), the front camera sees the world move left: AirSim's
+    OpticalFlow vx (the float read-back's one channel) is negative, about yaw rate x dt / FOV of the
+    image per frame; OpticalFlowVis shows leftward motion red."""
+    if not has_service('render'):
+        pytest.skip('needs render')
+    import airsim
+    _lift(client)
+    reqs = [airsim.ImageRequest('0', airsim.ImageType.OpticalFlow, True, False),
+            airsim.ImageRequest('0', airsim.ImageType.OpticalFlowVis, False, False)]
+    client.simGetImages(reqs, 'Drone1')   # spawns the cameras
+    client.enableApiControl(True, 'Drone1')
+    f = client.rotateByYawRateAsync(30, 3, 'Drone1')
+    for _ in range(30):
+        client._client.tick()
+    flow, vis = client.simGetImages(reqs, 'Drone1')
+    rate = client.getMultirotorState('Drone1').kinematics_estimated.angular_velocity.z_val
+    f.join()
+    assert len(flow.image_data_float) == flow.width * flow.height   # vx only, as AirSim's read-back
+    vx = np.array(flow.image_data_float, np.float32).reshape(flow.height, flow.width)
+    expect = -rate * 0.05 / math.radians(90)   # a 90 deg FOV image turns by rate x dt per frame (centre)
+    assert rate > 0.3 and float(np.median(vx[flow.height // 2 - 4:flow.height // 2 + 4])) == pytest.approx(expect, rel=0.25)
+    v = np.frombuffer(vis.image_data_uint8, np.uint8).reshape(vis.height, vis.width, 3).astype(int)
+    centre = v[vis.height // 2, vis.width // 2]
+    value = math.log(abs(expect) + 0.999) / math.log(1.099)   # dim: a sixtieth of the image per frame
+    assert centre[2] == pytest.approx(255 * value, rel=0.25) and centre[0] <= 2 and centre[1] <= centre[2] / 4   # B G R: red
+
+
 def test_api_control_taken_back_resumes_the_running_move(client):
     """AirSim 1.8: enableApiControl(False) cancels nothing; moveToPositionAsync's loop keeps
     sending its goals (refused meanwhile) and, control taken back, reaches its target."""

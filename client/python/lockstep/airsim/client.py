@@ -191,22 +191,67 @@ def _png(img):
             chunk(b'IDAT', zlib.compress(raw, 3)) + chunk(b'IEND', b''))
 
 
-def _flow_vis(flow):
-    """AirSim's OpticalFlowVis: hue = direction, saturation = magnitude (Middlebury style), BGR uint8."""
-    fx, fy = flow[..., 0], flow[..., 1]
-    mag = np.sqrt(fx * fx + fy * fy)
-    scale = max(float(mag.max()), 1e-6)
-    ang = (np.arctan2(-fy, -fx) / np.pi + 1) / 2  # 0..1
-    h6 = ang * 6
-    i = np.floor(h6).astype(int) % 6
-    f = h6 - np.floor(h6)
-    s = np.clip(mag / scale, 0, 1)
-    v = np.ones_like(s)
-    p, qv, t = v * (1 - s), v * (1 - s * f), v * (1 - s * (1 - f))
-    r = np.choose(i, [v, qv, p, p, t, v])
-    g = np.choose(i, [t, v, v, qv, p, p])
-    b = np.choose(i, [p, p, t, v, v, qv])
-    return (np.stack([b, g, r], axis=-1) * 255).astype(np.uint8)
+def _airsim_flow(flow):
+    """CARLA's optical flow (render's: x right, y down, image-plane motion since the previous
+    image, [-2, 2] spans the image) as AirSim's OpticalFlow material computes it: (current -
+    previous) clip position / 2, i.e. the motion as a fraction of the image, x right, y UP."""
+    f = np.asarray(flow, np.float32)
+    return f[..., 0] * np.float32(0.5), f[..., 1] * np.float32(-0.5)
+
+
+def _flow_vis(vx, vy):
+    """AirSim's OpticalFlowVis material (OpticalFlowRGBMaterial: hue 180 deg + the flow's angle,
+    as its HLSL with 180 / 3.1415; saturation 1; value log(|flow| + 0.999) / log(1.099), clamped
+    to 0..1), r, g, b floats 0..1 (no flow: black)."""
+    vx = np.asarray(vx, np.float32)
+    vy = np.asarray(vy, np.float32)
+    angle = np.float32(180.0) + np.arctan2(vy, vx) * np.float32(180.0 / 3.1415)
+    angle = np.where(angle < 0, angle + np.float32(360.0), angle)
+    angle = np.fmod(angle, np.float32(360.0))
+    norm = np.sqrt(vx * vx + vy * vy)
+    with np.errstate(divide='ignore'):
+        v = np.clip(np.log(norm + np.float32(0.999)) / np.float32(math.log(0.1 + 0.999)), 0.0, 1.0).astype(np.float32)
+    h60 = angle / np.float32(60.0)
+    c = v
+    x = c * (np.float32(1.0) - np.abs(np.fmod(h60, np.float32(2.0)) - np.float32(1.0)))
+    case = h60.astype(np.int64)
+    z = np.zeros_like(c)
+    one = np.ones_like(c)
+    r = np.select([case == 0, case == 1, case == 2, case == 3, case == 4, case == 5], [c, x, z, z, x, c], one)
+    g = np.select([case == 0, case == 1, case == 2, case == 3, case == 4, case == 5], [x, c, c, x, z, z], one)
+    b = np.select([case == 0, case == 1, case == 2, case == 3, case == 4, case == 5], [z, z, x, c, c, x], one)
+    return r, g, b
+
+
+def _unorm8(v):
+    """Unreal's float -> 8-bit read-back (FLinearColor::ToFColor without gamma): clamp to 0..1, x 255.999, truncate."""
+    return np.floor(np.clip(np.asarray(v, np.float32), 0.0, 1.0) * np.float32(255.999)).astype(np.uint8)
+
+
+def _airsim_normals(bgra, cam_q_ned):
+    """The render's camera-frame normals (x right, y up, z towards the camera; BGRA bytes,
+    (n + 1) / 2) as AirSim's NormalsMaterial writes them: Unreal's world-space normal (X north,
+    Y east, Z up) as (n + 1) / 2 in R, G, B, read back as Unreal does (x 255.999, truncated:
+    0 is 127, AirSim issue 2813's (127, 127, 255) for an upward face); `cam_q_ned` is the
+    camera's orientation (body FRD to world NED). Where nothing was drawn (the sky: alpha 0)
+    stays black."""
+    a = np.asarray(bgra)
+    n_view = a[..., 2::-1].astype(np.float32) / np.float32(255.0) * 2 - 1   # x, y, z
+    n_view[np.abs(n_view) <= np.float32(1.5 / 255)] = 0   # 127 and 128: the render's 0
+    n_frd = np.stack([-n_view[..., 2], n_view[..., 0], -n_view[..., 1]], axis=-1)
+    q = cam_q_ned
+    w, x, y, z = q.w_val, q.x_val, q.y_val, q.z_val
+    n = math.sqrt(w * w + x * x + y * y + z * z) or 1.0
+    w, x, y, z = w / n, x / n, y / n, z / n
+    rot = np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                    [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                    [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]], np.float32)
+    n_ned = n_frd @ rot.T
+    n_ue = np.stack([n_ned[..., 0], n_ned[..., 1], -n_ned[..., 2]], axis=-1)   # X north, Y east, Z up
+    out = np.ascontiguousarray(_unorm8(n_ue * 0.5 + 0.5)[..., ::-1])   # B, G, R as Unreal reads them back (0 -> 127)
+    if a.shape[-1] == 4:
+        out[a[..., 3] == 0] = 0
+    return out
 
 
 # --------------------------------------------------------------------------- shared state
@@ -837,6 +882,8 @@ class VehicleClient:
                 arr = lut[np.where(ids < 0, 256, ids)]
             else:
                 arr = np.repeat(np.clip(ids, 0, 255).astype(np.uint8)[..., None], 3, axis=2)
+        if it == ImageType.SurfaceNormals and arr.ndim == 3:
+            arr = _airsim_normals(arr, resp.camera_orientation)
         _encode(resp, it, arr)
         return resp
 
@@ -1993,13 +2040,14 @@ def _encode(resp, it, arr):
     """AirSim's encodings: float images as floats (pixels_as_float) or 8-bit grey; colour
     images as 3-channel BGR bytes, or RGBA PNG when compressed."""
     if it in (ImageType.OpticalFlow, ImageType.OpticalFlowVis):
-        flow = arr.astype(np.float32)
-        px = flow * np.array([arr.shape[1] / 2.0, arr.shape[0] / 2.0], dtype=np.float32)   # pixels
+        # AirSim's materials write (vx, vy, 0) or the Vis colour into a float target; its read-back
+        # gives pixels_as_float the R channel only (RenderRequest: item.R) and bytes clamped to 0..1.
+        vx, vy = _airsim_flow(arr)
+        r, g, b = (vx, vy, np.zeros_like(vx)) if it == ImageType.OpticalFlow else _flow_vis(vx, vy)
         if resp.pixels_as_float:
-            resp.image_data_float = px.reshape(-1).tolist()
+            resp.image_data_float = np.asarray(r, np.float32).reshape(-1).tolist()
             return
-        bgr = _flow_vis(px) if it == ImageType.OpticalFlowVis else \
-            np.clip(np.dstack([np.zeros(px.shape[:2]), px[..., 1] + 128, px[..., 0] + 128]), 0, 255).astype(np.uint8)
+        bgr = np.stack([_unorm8(b), _unorm8(g), _unorm8(r)], axis=-1)
     elif arr.ndim == 2 and arr.dtype != np.uint8:
         f = arr.astype(np.float32)
         if resp.pixels_as_float:

@@ -6,6 +6,15 @@ Suites:
   leaderboard  Leaderboard-style routes with the driving score (1.0/2.0 product, 2.1 additive)
   generate     rewrite the episode files (data/corl2017_<town>.json) from the towns' maps
 
+CARLA-Air's workloads and the learning data (each takes its own options, `--help`):
+  landing      precision landing of a drone on a moving car (touchdown error over seeded runs)
+  dataset      the synchronized multi-modal dataset (KITTI-like) and its alignment check
+  joint        the joint workload (100 vehicles, 50 walkers, a drone, 8 sensors) in ticks/s
+  crossview    one scene from the ground and the air through the 14 weather presets
+  vln          vision-language navigation pairs (instructions, ground and aerial images)
+  follow       drone follow with RL (cross-entropy method on DroneFollowEnv)
+  collect      imitation-learning data as CIL (noise injection, high-level commands)
+
 Each run starts its own simulation per town (ground_sim + sensors, 10 frames per simulated
 second) on --domain, or uses the one running with --connect, and writes to --out:
 summary.csv (one line per episode), episodes/*.csv (per-frame measurements), tables.md,
@@ -87,22 +96,52 @@ def _train_and_all_weathers(args, default_test):
     return train_w, test_w, train_w + [w for w in test_w if w not in train_w]
 
 
+def _value(text):
+    for cast in (int, float):
+        try:
+            return cast(text)
+        except ValueError:
+            pass
+    return {'True': True, 'False': False}.get(text, text)
+
+
+def _done_episodes(args):
+    """--resume: the episodes summary.csv of --out already holds, {(town, task, weather, id): row}."""
+    path = os.path.join(args.out, 'summary.csv')
+    if not (args.resume and os.path.exists(path)):
+        return {}
+    import csv
+    with open(path, newline='') as f:
+        rows = [{k: _value(v) for k, v in r.items()} for r in csv.DictReader(f)]
+    return {(r['town'], r['exp_id'], r['weather'], r['episode']): r for r in rows}
+
+
 def run_corl2017(args):
     agent = runner.make_agent(args.agent, args.ignore_lights)
     train_w, _, weathers = _train_and_all_weathers(args, runner.TEST_WEATHERS)
     tasks = [t for t in report.TASKS if not args.tasks or t in args.tasks.split(',')]
     towns = Towns(args)
     results = []
+    done = _done_episodes(args)
+    resumed = 0
     started = time.time()
     os.makedirs(os.path.join(args.out, 'episodes'), exist_ok=True)
     try:
         for town in args.towns.split(','):
             doc, eps = episodes_mod.load(town)
+            if all((town, t, w, ep['id']) in done for t in tasks for w in weathers for ep in eps[t][:args.episodes]):
+                results += [done[(town, t, w, ep['id'])] for t in tasks for w in weathers for ep in eps[t][:args.episodes]]
+                resumed += len(tasks) * len(weathers) * len(eps[tasks[0]][:args.episodes])
+                continue
             ctx = towns.open(town)
             for task in tasks:
                 veh, ped = CORL_TRAFFIC.get(town, (20, 50)) if task == 'Nav. dynamic' else (0, 0)
                 for w in weathers:
                     for ep in eps[task][:args.episodes]:
+                        if (town, task, w, ep['id']) in done:
+                            results.append(done[(town, task, w, ep['id'])])
+                            resumed += 1
+                            continue
                         log = os.path.join(args.out, 'episodes', '%s_%s_w%d_%02d.csv' % (
                             town, task.replace(' ', '').replace('.', ''), w, ep['id']))
                         r, _ = runner.run_episode(ctx, agent, ep, task=task, weather=w, vehicles=veh, walkers=ped,
@@ -118,9 +157,11 @@ def run_corl2017(args):
     finally:
         towns.close()
     wall = time.time() - started
-    header = ('%d episodes in %.0f s of wall time (%.0f episodes/hour) on this machine; towns %s, weathers %s '
-              '(train %s), %s episode(s) per task and weather; time-out at 10 km/h + 10 s; success within 2 m.'
-              % (len(results), wall, 3600.0 * len(results) / max(wall, 1e-9), args.towns,
+    ran = len(results) - resumed
+    header = ('%d episodes (%d run now in %.0f s of wall time, %.0f episodes/hour, %d kept from before) on this '
+              'machine; towns %s, weathers %s (train %s), %s episode(s) per task and weather; time-out at 10 km/h + '
+              '10 s; success within 2 m.'
+              % (len(results), ran, wall, 3600.0 * ran / max(wall, 1e-9), resumed, args.towns,
                  ','.join(map(str, weathers)), ','.join(map(str, train_w)), args.episodes))
     success, kms, _ = report.write_corl2017(args.out, results, train_w, agent.name, header)
     print()
@@ -130,7 +171,7 @@ def run_corl2017(args):
                                 'paper_CIL_km', 'paper_RL_km']))
     print('written: %s' % os.path.join(args.out, 'tables.md'))
     print(json.dumps({'suite': 'corl2017', 'agent': agent.name, 'episodes': len(results),
-                      'episodes_per_hour': round(3600.0 * len(results) / max(wall, 1e-9), 1),
+                      'episodes_per_hour': round(3600.0 * ran / max(wall, 1e-9), 1),
                       'success_%': {'%s/%s' % (r['task'], r['condition']): r['ours_%'] for r in success}}))
     return results
 
@@ -199,10 +240,17 @@ def run_leaderboard(args):
     return leaderboard.run(args, Towns(args))
 
 
+WORKLOADS = ('landing', 'dataset', 'joint', 'crossview', 'vln', 'follow', 'collect')
+
+
 def main(argv=None):
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv and argv[0] in WORKLOADS:
+        import importlib
+        return importlib.import_module('lockstep.benchmarks.' + argv[0]).main(argv[1:])
     ap = argparse.ArgumentParser(prog='lockstep bench', description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument('suite', choices=['corl2017', 'nocrash', 'leaderboard', 'generate'])
+    ap.add_argument('suite', choices=['corl2017', 'nocrash', 'leaderboard', 'generate'] + list(WORKLOADS))
     ap.add_argument('--agent', default='autopilot', help='autopilot (Traffic Manager), basic, behavior (CARLA\'s agents), modular (the paper\'s MP baseline)')
     ap.add_argument('--episodes', type=int, default=25, help='episodes per task and weather (at most 25)')
     ap.add_argument('--towns', default='Town01,Town02')
@@ -214,6 +262,8 @@ def main(argv=None):
     ap.add_argument('--connect', action='store_true', help='use the simulation already running (load_world per town)')
     ap.add_argument('--ignore-lights', action='store_true',
                     help='the agent ignores traffic lights (CoRL 2017 allows it; the other cars obey them)')
+    ap.add_argument('--resume', action='store_true',
+                    help="corl2017: keep the episodes --out's summary.csv already has and run the others")
     ap.add_argument('--grid', type=float, default=0.2, help='footprint sampling step in m (CARLA 0.8: 0.1)')
     ap.add_argument('--seed', type=int, default=0)
     ap.add_argument('--routes', default='', help='leaderboard: a JSON file of routes (default: the Navigation episodes)')

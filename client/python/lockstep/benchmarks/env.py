@@ -188,11 +188,16 @@ class DrivingEnv:
                 self.sim = None
 
 
-def _worker(conn, domain, kwargs):
+from .follow import DroneFollowEnv  # noqa: E402 - the drone's environment, beside the car's
+
+ENVS = {'driving': DrivingEnv, 'drone_follow': DroneFollowEnv}
+
+
+def _worker(conn, domain, kwargs, kind='driving'):
     os.environ['LOCKSTEP_DOMAIN'] = str(domain)
     env = None
     try:
-        env = DrivingEnv(domain=domain, **kwargs)
+        env = ENVS[kind](domain=domain, **kwargs)
         conn.send(('ok', (env.observation_space, env.action_space)))
         while True:
             cmd, arg = conn.recv()
@@ -211,10 +216,13 @@ def _worker(conn, domain, kwargs):
 
 
 class VectorEnv:
-    """N DrivingEnvs, each in its own process with its own simulation on its own DDS domain
-    (base_domain + i, or the list `domains`). reset/step take and return lists."""
+    """N environments (`env`: 'driving', DrivingEnv, or 'drone_follow', follow.DroneFollowEnv),
+    each in its own process with its own simulation on its own DDS domain (base_domain + i,
+    or the list `domains`). reset/step take and return lists."""
 
-    def __init__(self, n, base_domain=None, domains=None, **kwargs):
+    def __init__(self, n, base_domain=None, domains=None, env='driving', **kwargs):
+        if env not in ENVS:
+            raise ValueError("VectorEnv: env '%s' is one of %s" % (env, ', '.join(ENVS)))
         if domains is None:
             if base_domain is None:
                 raise ValueError('VectorEnv: base_domain or domains')
@@ -228,7 +236,7 @@ class VectorEnv:
         for d in self.domains:
             # One at a time: N simulations starting at once on a small machine time out.
             parent, child = ctx.Pipe()
-            p = ctx.Process(target=_worker, args=(child, d, kwargs), daemon=True)
+            p = ctx.Process(target=_worker, args=(child, d, kwargs, env), daemon=True)
             p.start()
             child.close()
             self.conns.append(parent)

@@ -139,12 +139,23 @@ void GroundService::BeginRun(const msg::WorldInfo& world) {
   }
   world_ = std::make_unique<ground::World>(town_, seed_, physics_);
   world_->SetWeather(LightWeather(world.weather()));
-  wait_for_air_ = false;
-  for (const auto& r : world.required_services()) {
-    if (r.to_string() == "air_sim") wait_for_air_ = true;
+  input_timeout_s_ = s.service_timeout() > 0 ? s.service_timeout() : 10.0;
+  // Whose AirState to wait for: the other required members that declare drones (found by what
+  // they simulate, never by a service name). Every member publishes its set when it joins,
+  // before the coordinator counts it alive.
+  std::vector<std::string> others;
+  for (const std::string& r : RequiredServices(world)) {
+    if (r != name_) others.push_back(r);
   }
+  if (!declarations_.WaitFor(others, std::chrono::seconds(30))) {
+    throw InputError(name_ + ": the blueprint declarations of the run's services did not arrive within 30 s");
+  }
+  drone_sources_ = others.empty() ? std::vector<std::string>{} : declarations_.Declaring(msg::ActorKind::ACTOR_DRONE, others);
+  wait_for_air_ = !drone_sources_.empty();
   spdlog::info("run {}: seed {}, sub-steps of {} s (at most {}), drones {}", world.run(), seed_, physics_.max_substep_delta_time,
-               physics_.max_substeps, wait_for_air_ ? "from air_sim (frame k-1)" : "none");
+               physics_.max_substeps,
+               wait_for_air_ ? "from " + drone_sources_.front() + "'s AirState (frame k-1)"
+                             : std::string("none (no member declares drones)"));
 }
 
 std::vector<uint8_t> GroundService::SaveState() const { return world_ ? world_->Save() : std::vector<uint8_t>{}; }
@@ -357,31 +368,36 @@ void GroundService::Apply(const msg::Command& c) {
   }
 }
 
-// Jacobi coupling: the drones of frame k-1 are obstacles while stepping to frame k.
-void GroundService::ExternalBodies(const msg::Tick& tick) {
+// Jacobi coupling: the drones of frame k-1 are obstacles while stepping to frame k. Never
+// step without them: a missing input faults the run (the state must not depend on when a
+// sample arrived), as air_sim does with GroundState.
+std::vector<ground::ExternalBody> GroundService::Drones(const msg::Tick& tick) {
   std::vector<ground::ExternalBody> bodies;
   if (wait_for_air_ && tick.frame() >= 2 && !replaying()) {
-    auto air = air_.WaitFor(tick.run(), tick.frame() - 1, std::chrono::seconds(10));
+    const auto timeout = std::chrono::milliseconds(static_cast<int64_t>(input_timeout_s_ * 1000));
+    auto air = air_.WaitFor(tick.run(), tick.frame() - 1, timeout);
     if (!air) {
-      spdlog::error("no AirState of frame {} within 10 s: stepping without drones", tick.frame() - 1);
-    } else {
-      for (const auto& d : air->drones()) {
-        ground::ExternalBody e;
-        e.id = d.actor();
-        e.kind = ground::ObjectKind::kDrone;
-        e.pose = ToPose(d.transform());
-        e.velocity = ToVec(d.linear_velocity());
-        e.half_extents = ground::Vec3(0.3, 0.3, 0.1);
-        e.mass = 1.0;
-        bodies.push_back(e);
-      }
+      throw MissingInput(name_ + ": no AirState of frame " + std::to_string(tick.frame() - 1) + " (from " + drone_sources_.front() +
+                       ") within " + std::to_string(input_timeout_s_) + " s; a missing input faults the run");
+    }
+    for (const auto& d : air->drones()) {
+      ground::ExternalBody e;
+      e.id = d.actor();
+      e.kind = ground::ObjectKind::kDrone;
+      e.pose = ToPose(d.transform());
+      e.velocity = ToVec(d.linear_velocity());
+      e.half_extents = ground::Vec3(0.3, 0.3, 0.1);
+      e.mass = 1.0;
+      bodies.push_back(e);
     }
   }
-  world_->SetExternalBodies(std::move(bodies));
+  return bodies;
 }
 
 void GroundService::Step(const msg::Tick& tick) {
   if (!world_) throw InputError("ground_sim: a tick before the run began");
+  // Inputs first: a missing one throws before anything of this frame is applied.
+  std::vector<ground::ExternalBody> drones = Drones(tick);
   pending_events_.clear();
   {
     // The spawns this tick carries were reserved by our checks; the others age.
@@ -400,7 +416,7 @@ void GroundService::Step(const msg::Tick& tick) {
     std::erase_if(reservations_, [](const Reservation& r) { return r.steps_left <= 0; });
   }
   for (const auto& c : tick.commands()) Apply(c);
-  ExternalBodies(tick);
+  world_->SetExternalBodies(std::move(drones));
   world_->Step(tick.dt());
   if (replaying()) return;
   if (!output_dir_.empty()) {

@@ -6,6 +6,7 @@
 #include <mutex>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "lockstep/ground/run_log.h"
 #include "lockstep/ground/world.h"
@@ -27,8 +28,11 @@ class GroundService final : public ServiceCore {
   uint64_t StateHash() const override { return world_ ? world_->StateHash() : 0; }
   std::vector<uint8_t> SaveState() const override;
   void RestoreState(const std::vector<uint8_t>& state) override;
-  // With an air_sim in the run the step waits for the drones of frame k-1.
+  // With a required member that declares drones the step waits for their AirState of
+  // frame k-1 (at most the run's service_timeout; then it throws InputError: the run faults).
   bool StepNeverWaits() const override { return !wait_for_air_; }
+  // The required members whose AirState the step waits for (this run).
+  const std::vector<std::string>& drone_sources() const { return drone_sources_; }
 
   const ground::World* world() const { return world_.get(); }
 
@@ -42,7 +46,8 @@ class GroundService final : public ServiceCore {
   // CARLA's collision check at spawn (docs/architecture.md, "Spawns the owner refuses"): the
   // footprint a vehicle or walker spawn would take, "" when it takes none.
   std::optional<std::pair<ground::Pose, ground::Vec3>> Footprint(const msg::SpawnActor& s) const;
-  void ExternalBodies(const msg::Tick& tick);
+  // The input of the step: the drones of frame k-1 (Jacobi coupling), when a member declares drones.
+  std::vector<ground::ExternalBody> Drones(const msg::Tick& tick);
   msg::GroundState PublishState(const msg::FrameStamp& stamp) const;
   msg::PhysicsEvents PublishEvents(const msg::FrameStamp& stamp) const;
 
@@ -63,6 +68,8 @@ class GroundService final : public ServiceCore {
   ground::PhysicsSettings physics_;
   uint64_t seed_ = 0;
   bool wait_for_air_ = false;
+  std::vector<std::string> drone_sources_;  // required members declaring drones
+  double input_timeout_s_ = 10;             // s, the run's service_timeout
   std::vector<msg::SimEvent> pending_events_;
   // Spawns this service accepted in a SpawnCheck that no tick has carried yet: a later check
   // collides with them as with the actors. Each expires after kReservationSteps steps

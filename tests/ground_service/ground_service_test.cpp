@@ -7,12 +7,16 @@
 #include <fstream>
 #include <map>
 #include <mutex>
+#include <sstream>
 #include <thread>
 
 #include "ground_service.h"
 #include "lockstep/coordinator/coordinator.h"
 #include "lockstep/map/map.h"
+#include "lockstep/runtime/blueprint_builder.h"
 #include "lockstep/runtime/command_builders.h"
+#include "lockstep/runtime/error.h"
+#include "lockstep/runtime/hash.h"
 #include "observer.h"
 
 namespace lockstep {
@@ -296,6 +300,97 @@ TEST_F(GroundServiceTest, TheTrafficManagerDrivesAHandedOverCarAndGivesItBack) {
   v = Vehicle(observer_->last_frame(), car);
   ASSERT_TRUE(v);
   EXPECT_FALSE(v->autopilot());
+}
+
+// The core alone on the in-process bus, fed by hand: the run's map, the members' declarations
+// and (or not) the drones' AirState of the frame before. Whose AirState ground_sim waits for
+// follows from what the required members declare, never from a service name; a frame whose
+// drones did not come faults the run (MissingInput out of Step) instead of stepping without
+// them after a wall-clock wait (a state that would depend on when a sample arrived).
+class GroundInputs : public ::testing::Test {
+ protected:
+  void Declare(const std::string& service, msg::ActorKind kind, const std::string& blueprint) {
+    msg::BlueprintSet set;
+    set.service(service);
+    set.blueprints({blueprint::Make(blueprint, kind, {blueprint::String("role_name", "")})});
+    sets_.Write(set);
+  }
+  msg::WorldInfo World(const std::vector<std::string>& required) {
+    std::ifstream in(kTown01);
+    std::stringstream xodr;
+    xodr << in.rdbuf();
+    msg::MapData m;
+    m.run(1);
+    m.name("Town01");
+    m.opendrive(xodr.str());
+    m.content_hash(Fnv1a64().Add(std::string_view(m.opendrive())).Add(std::string_view(m.scene())).value());
+    map_.Write(m);
+    msg::WorldInfo w;
+    w.run(1);
+    w.map_name("Town01");
+    w.map_hash(m.content_hash());
+    w.seed(7);
+    msg::WorldSettings settings = DefaultWorldSettings();
+    settings.service_timeout(0.3);  // how long a step waits for an input
+    w.settings(settings);
+    std::vector<msg::ServiceName> names(required.begin(), required.end());
+    w.required_services(names);
+    return w;
+  }
+  static msg::Tick TickOf(uint64_t frame) {
+    msg::Tick t;
+    t.run(1);
+    t.frame(frame);
+    t.dt(0.05);
+    t.sim_time(0.05 * static_cast<double>(frame));
+    return t;
+  }
+  void PublishDrones(uint64_t frame) {
+    msg::AirState a;
+    a.stamp().run(1);
+    a.stamp().frame(frame);
+    msg::DroneState d;
+    d.actor(99);
+    d.blueprint("drone.flyer");
+    d.transform(MakePose(150, 2, 3, 0));
+    a.drones({d});
+    air_.Write(a);
+  }
+
+  std::unique_ptr<Bus> bus_ = CreateInProcessBus();
+  Writer<msg::BlueprintSet> sets_{*bus_, topics::kBlueprints};
+  Writer<msg::MapData> map_{*bus_, topics::kMap};
+  Writer<msg::AirState> air_{*bus_, topics::kAirState};
+  GroundService core_{*bus_};
+};
+
+TEST_F(GroundInputs, AFrameWithoutTheDronesOfTheFrameBeforeFaultsInsteadOfSteppingWithoutThem) {
+  // A drone simulator that is not called "air_sim": it declares drones, so its AirState is an input.
+  Declare("flyers", msg::ActorKind::ACTOR_DRONE, "drone.flyer");
+  core_.BeginRun(World({"ground_sim", "flyers"}));
+  EXPECT_EQ(core_.drone_sources(), std::vector<std::string>{"flyers"});
+  EXPECT_FALSE(core_.StepNeverWaits());
+  core_.Step(TickOf(1));  // frame 1 reads no earlier frame
+  const uint64_t hash = core_.StateHash();
+  try {
+    core_.Step(TickOf(2));
+    FAIL() << "frame 2 stepped without the AirState of frame 1";
+  } catch (const MissingInput& e) {
+    EXPECT_NE(std::string(e.what()).find("no AirState of frame 1 (from flyers)"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(core_.StateHash(), hash) << "the failed step changed the state";
+  // With the input there, the frame steps.
+  PublishDrones(1);
+  EXPECT_NO_THROW(core_.Step(TickOf(2)));
+}
+
+TEST_F(GroundInputs, AMemberNamedAirSimThatDeclaresNoDronesIsNotWaitedFor) {
+  Declare("air_sim", msg::ActorKind::ACTOR_PROP, "static.prop.crate");
+  core_.BeginRun(World({"ground_sim", "air_sim"}));
+  EXPECT_TRUE(core_.drone_sources().empty());
+  EXPECT_TRUE(core_.StepNeverWaits());
+  core_.Step(TickOf(1));
+  EXPECT_NO_THROW(core_.Step(TickOf(2)));
 }
 
 }  // namespace

@@ -30,6 +30,7 @@
 #include "hashes.h"
 #include "log_command.h"
 #include "progress.h"
+#include "remote.h"
 #include "serve.h"
 #include "supervisor.h"
 
@@ -68,7 +69,10 @@ int Up(const std::string& config_file, int domain, bool with_coordinator) {
   if (with_coordinator) {
     children.push_back({"coordinator", {bin + "/lockstep_coordinator", config_file, "--domain", dom}, false, true});
   }
+  size_t local_services = 0;
   for (const auto& s : config.services) {
+    if (config.HostOf(s.name) != nullptr) continue;  // started where it runs: printed below
+    ++local_services;
     std::string exe = s.executable.empty() ? bin + "/lockstep_" + s.kind : s.executable;
     if (exe.find('/') == std::string::npos) exe = bin + "/" + exe;
     if (!std::filesystem::exists(exe)) {
@@ -79,7 +83,17 @@ int Up(const std::string& config_file, int domain, bool with_coordinator) {
     children.push_back({s.name, argv, s.restart == "on-failure", false});
   }
   std::printf("lockstep: starting '%s' on DDS domain %d: %s%zu service(s)\n", config.name.c_str(), config.domain_id,
-              with_coordinator ? "coordinator + " : "no coordinator (a script hosts it), ", config.services.size());
+              with_coordinator ? "coordinator + " : "no coordinator (a script hosts it), ", local_services);
+  // The services of other hosts: the exact command that starts each where it runs.
+  const auto remote = lockstep::launcher::RemoteCommands(config, config_file, std::filesystem::path(bin).parent_path().string());
+  if (!remote.empty()) {
+    std::printf("lockstep: %zu service(s) run on other hosts; start each there (the run waits for the required ones):\n", remote.size());
+    for (const auto& line : remote) std::printf("  %s\n", line.c_str());
+    if (config.participant_profile == "lockstep.participant.loopback") {
+      std::printf("lockstep: warning: participant_profile lockstep.participant.loopback keeps DDS on this machine; "
+                  "other hosts will not find it (docs/deployment.md#several-machines)\n");
+    }
+  }
   std::fflush(stdout);
   // A member the run reports failed while its process still runs is hung (stopped, or a
   // step stuck while its heartbeat thread goes on): the supervisor replaces it.
@@ -278,6 +292,9 @@ int main(int argc, char** argv) {
   up->add_option("--domain", domain, "DDS domain id (overrides the config)");
   bool no_coordinator = false;
   up->add_flag("--no-coordinator", no_coordinator, "start the services only: a script hosts the coordinator (lockstep.Coordinator)");
+  bool ros2 = false;
+  up->add_flag("--ros2", ros2, "also publish the ROS 2 topics of CARLA's native interface (adds the ros2_bridge service; "
+                               "as `ros2: true` in the config)");
 
   auto* serve = app.add_subcommand("serve", "the simulator a CARLA user starts: every built service on a map, "
                                              "free-running at real time, until Ctrl-C");
@@ -289,6 +306,7 @@ int main(int argc, char** argv) {
   serve->add_option("--fixed-delta-seconds", serve_options.fixed_delta_seconds, "s of simulated time per tick")
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
+  serve->add_flag("--ros2", ros2, "also publish the ROS 2 topics of CARLA's native interface, as CARLA's server with --ros2");
 
   auto* status = app.add_subcommand("status", "show a running simulation");
   int status_domain = 0;
@@ -328,6 +346,9 @@ int main(int argc, char** argv) {
   lockstep::InitLogging("lockstep");
   std::signal(SIGINT, OnSignal);
   std::signal(SIGTERM, OnSignal);
+  // The coordinator and every service read the config: the flag reaches them through the
+  // environment, as the default recorder does.
+  if (ros2) setenv("LOCKSTEP_ROS2", "1", 1);
   try {
     if (*up) return Up(config_file, domain, !no_coordinator);
     if (*serve) return Serve(serve_options);

@@ -1,0 +1,67 @@
+// `lockstep up` across hosts, end to end: the services of this machine start, the others'
+// exact commands are printed (and the run waits for the required ones), a bad host is
+// refused before anything starts.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+
+#include "process.h"
+
+namespace lockstep::testing {
+namespace {
+
+using namespace std::chrono_literals;
+
+TEST(LockstepUp, StartsTheLocalServicesAndPrintsTheOthersCommands) {
+  const int domain = TestDomain();
+  const std::string config = WriteTempFile("hosts.yaml", R"(name: split
+participant_profile: lockstep.participant.loopback
+recorder: false
+ticks: 20
+hosts:
+  far: {address: sim@hostb, build_dir: /opt/lockstep/build}
+  boxes: {container: docker, network: simnet}
+services:
+  - {name: here, kind: noop}
+  - {name: there, kind: noop, host: far, required: false}
+  - {name: boxed, kind: noop, host: boxes, required: false, args: [--participant-profile, lockstep.participant.udp]}
+)");
+  const std::string cfg = std::filesystem::absolute(config).lexically_normal().string();
+  const std::string dir = std::filesystem::path(cfg).parent_path().string();
+  const std::string d = std::to_string(domain);
+  Process up({Bin("lockstep"), "up", config, "--domain", d});
+  const auto code = up.Wait(60s);
+  ASSERT_TRUE(code) << "lockstep up did not finish:\n" << up.Output();
+  EXPECT_EQ(*code, 0) << up.Output();
+  const std::string out = up.Output();
+  EXPECT_NE(out.find("coordinator + 1 service(s)"), std::string::npos) << out;
+  EXPECT_NE(out.find("2 service(s) run on other hosts"), std::string::npos) << out;
+  EXPECT_NE(out.find("  [far] ssh sim@hostb '/opt/lockstep/build/bin/lockstep_noop --name there --config " + cfg + " --domain " + d + "'\n"),
+            std::string::npos)
+      << out;
+  EXPECT_NE(out.find("  [boxes] docker run -d --name boxed --network simnet -v " + dir + ":/etc/lockstep:ro -e LOCKSTEP_DOMAIN=" + d +
+                     " localhost/lockstep/noop --name boxed --config /etc/lockstep/hosts.yaml --domain " + d +
+                     " --participant-profile lockstep.participant.udp\n"),
+            std::string::npos)
+      << out;
+  EXPECT_NE(out.find("loopback keeps DDS on this machine"), std::string::npos) << out;
+  EXPECT_NE(out.find("here        | info: stopping after frame 20"), std::string::npos) << out;
+  EXPECT_EQ(out.find("there       |"), std::string::npos) << "a remote service was started here:\n" << out;
+}
+
+TEST(LockstepUp, AnUnknownHostIsRefusedBeforeAnythingStarts) {
+  const std::string config = WriteTempFile("badhost.yaml", R"(services:
+  - {name: here, kind: noop}
+  - {name: there, kind: noop, host: gpu7}
+)");
+  Process up({Bin("lockstep"), "up", config, "--domain", std::to_string(TestDomain())});
+  const auto code = up.Wait(30s);
+  ASSERT_TRUE(code) << up.Output();
+  EXPECT_EQ(*code, 2) << up.Output();
+  EXPECT_NE(up.Output().find("key 'services[1].host' unknown host 'gpu7' (no `hosts:` in this config;"), std::string::npos) << up.Output();
+  EXPECT_EQ(up.Output().find("starting"), std::string::npos) << up.Output();
+}
+
+}  // namespace
+}  // namespace lockstep::testing

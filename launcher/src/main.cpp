@@ -342,6 +342,10 @@ int main(int argc, char** argv) {
   auto* python = app.add_subcommand("python", "run a Python script with the lockstep, carla and airsim packages");
   python->prefix_command();
 
+  auto* bench = app.add_subcommand("bench", "driving benchmarks and CARLA-Air workloads: lockstep bench corl2017 --agent "
+                                            "autopilot --episodes N (= lockstep python -m lockstep.benchmarks ...)");
+  bench->prefix_command();
+
   CLI11_PARSE(app, argc, argv);
   lockstep::InitLogging("lockstep");
   std::signal(SIGINT, OnSignal);
@@ -382,6 +386,11 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (*python) return RunPython(python->remaining());
+    if (*bench) {
+      std::vector<std::string> args{"-m", "lockstep.benchmarks"};
+      for (const auto& a : bench->remaining()) args.push_back(a);
+      return RunPython(args);
+    }
   } catch (const std::exception& e) {
     std::fprintf(stderr, "lockstep: %s\n", e.what());
     return 2;

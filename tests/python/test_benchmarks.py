@@ -306,6 +306,21 @@ def test_driving_onto_the_sidewalk_is_counted(ctx):
     assert r['intersection_offroad'] >= 1
 
 
+# ---- the command (no simulation) ----
+
+def test_lockstep_bench_runs_the_benchmarks_package():
+    # `lockstep bench SUITE ...` is `lockstep python -m lockstep.benchmarks SUITE ...`; the
+    # workloads' names run their own modules.
+    import os
+    import subprocess
+    from conftest import BIN
+    exe = os.path.join(BIN, 'lockstep')
+    r = subprocess.run([exe, 'bench', 'corl2017', '--episodes', '0'], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2 and 'lockstep bench: error: --episodes: 1 to 25' in r.stderr, r
+    r = subprocess.run([exe, 'bench', 'vln', '--help'], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0 and '--routes' in r.stdout and 'vision-language' in r.stdout, r
+
+
 # ---- Leaderboard-style routes (no simulation) ----
 
 def test_route_completion_and_score():

@@ -11,8 +11,11 @@
 //     half of CARLA's about 200 MB/h for about 150 actors);
 //   - re-simulation speed: that log's ticks (with the run's earlier ticks it carries)
 //     re-drive fresh services from frame 1 (x real time), every world hash compared;
-//   - playback speed: carla.Client.replay_file (the client side's playback) reports it; not
-//     measured here yet (null).
+//   - playback speed: after the long log is stopped, a block of ticks of the same world
+//     without playback, then a client's replay_file of that log (CMD_RECORDER REPLAY_START
+//     on the bus, as carla.Client.replay_file sends it): the coordinator puts the log's
+//     actors (the run's own, reused) at their recorded poses tick by tick, free-running;
+//     x real time of the ticks that show the log's frames, and its ratio to the plain block.
 // JSON lines; the last one is the summary.
 //
 //   bench_recorder [--vehicles N] [--walkers N] [--block N] [--blocks N] [--long N] [--seed N] [--keep 1]
@@ -21,11 +24,15 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <condition_variable>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <filesystem>
+#include <map>
+#include <mutex>
 #include <numeric>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -68,6 +75,10 @@ std::string Alias(char c, int i) {
   return s;
 }
 
+// The frame whose tick stops the long recording; the plain block of the playback
+// comparison follows it (frames LongEnd + 1 .. LongEnd + long_block), then the playback.
+uint64_t LongEnd(const Options& o) { return static_cast<uint64_t>(o.warmup + o.blocks * o.block + o.long_block) + 1; }
+
 LaunchConfig Config(const Options& o, const std::string& dir, uint64_t ticks) {
   LaunchConfig c;
   c.world = DefaultWorldSettings();
@@ -84,12 +95,7 @@ LaunchConfig Config(const Options& o, const std::string& dir, uint64_t ticks) {
     const auto& p = sp[static_cast<size_t>(i) * sp.size() / static_cast<size_t>(o.vehicles)];
     const std::string a = Alias('v', i);
     c.scenario.push_back(Step(1, SpawnBody("vehicle.tesla.model3", MakePose(p.location.x(), p.location.y(), p.location.z() + 0.27, p.yaw)), a));
-    msg::TrafficManagerCommand tm;
-    tm.parameter(msg::TrafficManagerParameter::TM_AUTOPILOT);
-    tm.value(1);
-    msg::CommandBody b;
-    b.traffic_manager(tm);
-    c.scenario.push_back(Step(2, b, "", a));
+    c.scenario.push_back(Step(2, AutopilotBody(0, true), "", a));  // the alias names the actor
   }
   const auto wp = town.PedestrianSpawnPoints(6.0);
   for (int i = 0; i < o.walkers && i < static_cast<int>(wp.size()); ++i) {
@@ -106,8 +112,10 @@ LaunchConfig Config(const Options& o, const std::string& dir, uint64_t ticks) {
   for (int i = 0; i < 2; ++i) {
     const std::string d = Alias('d', i);
     const auto& p = sp.at(static_cast<size_t>(i) * 3 + 1);
-    c.scenario.push_back(Step(1, SpawnBody("drone.generic_quad", MakePose(p.location.x() + 3, p.location.y() + 3, p.location.z() + 15, 0)), d));
-    for (auto [frame, kind] : {std::pair{2ull, msg::DroneCommandKind::DRONE_ARM}, std::pair{3ull, msg::DroneCommandKind::DRONE_TAKEOFF}}) {
+    // On the ground, armed, then a takeoff once it has settled (AirSim refuses a takeoff
+    // while the drone moves).
+    c.scenario.push_back(Step(1, SpawnBody("drone.generic_quad", MakePose(p.location.x() + 3, p.location.y() + 3, p.location.z() + 0.3, 0)), d));
+    for (auto [frame, kind] : {std::pair{5ull, msg::DroneCommandKind::DRONE_ARM}, std::pair{30ull, msg::DroneCommandKind::DRONE_TAKEOFF}}) {
       msg::DroneCommand dc;
       dc.kind(kind);
       dc.yaw().is_rate(true);
@@ -120,27 +128,13 @@ LaunchConfig Config(const Options& o, const std::string& dir, uint64_t ticks) {
   for (int k = 0; k < o.blocks; ++k) {
     if (k % 2 == 0) continue;
     const uint64_t start = static_cast<uint64_t>(o.warmup + k * o.block) + 1;
-    msg::RecorderCommand r;
-    r.action(msg::RecorderAction::RECORDER_START);
-    r.name(dir + "/block" + std::to_string(k) + ".lslog");
-    msg::CommandBody b;
-    b.recorder(r);
-    c.scenario.push_back(Step(start, b));
-    msg::RecorderCommand s;
-    s.action(msg::RecorderAction::RECORDER_STOP);
-    msg::CommandBody e;
-    e.recorder(s);
-    c.scenario.push_back(Step(start + static_cast<uint64_t>(o.block), e));
+    c.scenario.push_back(Step(start, RecorderBody(msg::RecorderAction::RECORDER_START, dir + "/block" + std::to_string(k) + ".lslog")));
+    c.scenario.push_back(Step(start + static_cast<uint64_t>(o.block), RecorderBody(msg::RecorderAction::RECORDER_STOP)));
   }
-  // Then one long recording (the log size per hour and the re-simulation).
-  {
-    msg::RecorderCommand r;
-    r.action(msg::RecorderAction::RECORDER_START);
-    r.name(dir + "/long.lslog");
-    msg::CommandBody b;
-    b.recorder(r);
-    c.scenario.push_back(Step(static_cast<uint64_t>(o.warmup + o.blocks * o.block) + 1, b));
-  }
+  // Then one long recording (the log size per hour, the re-simulation and the playback),
+  // stopped at LongEnd(o): its frames are LongEnd(o) - long_block .. LongEnd(o) - 1.
+  c.scenario.push_back(Step(static_cast<uint64_t>(o.warmup + o.blocks * o.block) + 1, RecorderBody(msg::RecorderAction::RECORDER_START, dir + "/long.lslog")));
+  c.scenario.push_back(Step(LongEnd(o), RecorderBody(msg::RecorderAction::RECORDER_STOP)));
   std::stable_sort(c.scenario.begin(), c.scenario.end(), [](const auto& a, const auto& b) { return a.frame < b.frame; });
   return c;
 }
@@ -206,10 +200,55 @@ int main(int argc, char** argv) {
   const std::string dir = (std::filesystem::temp_directory_path() / ("lockstep-bench-recorder-" + std::to_string(getpid()))).string();
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
-  const uint64_t ticks = static_cast<uint64_t>(o.warmup + o.blocks * o.block + o.long_block);
+  // After the long log: a plain block, then the playback of that log (its frames and the
+  // tick that ends it) with room for the reply to land a few frames later.
+  const uint64_t plain_end = LongEnd(o) + static_cast<uint64_t>(o.long_block);
+  const uint64_t ticks = plain_end + static_cast<uint64_t>(o.long_block) + 40;
   const LaunchConfig c = Config(o, dir, ticks);
+  const std::string last_log = dir + "/long.lslog";
+  // Playback: FrameDone wall times, and a client's replay_file once the plain block is done.
+  using Clock = std::chrono::steady_clock;
+  std::mutex mu;
+  std::condition_variable cv;
+  std::map<uint64_t, Clock::time_point> done_at;
+  std::optional<msg::CommandReply> replay_reply;
+  std::unique_ptr<Reader<msg::FrameDone>> done_reader;
+  std::unique_ptr<Reader<msg::CommandReply>> reply_reader;
+  std::unique_ptr<Writer<msg::Command>> command_writer;
+  std::atomic<bool> run_over{false};
+  std::thread client;
   const auto t0 = std::chrono::steady_clock::now();
-  const RunResult run = Run(c, false);
+  const RunResult run = Run(c, false, [&](Bus& bus) {
+    done_reader = std::make_unique<Reader<msg::FrameDone>>(bus, topics::kFrameDone, [&](const msg::FrameDone& d, const SampleInfo&) {
+      const auto now = Clock::now();
+      std::lock_guard<std::mutex> lock(mu);
+      done_at.emplace(d.frame(), now);
+      cv.notify_all();
+    });
+    reply_reader = std::make_unique<Reader<msg::CommandReply>>(bus, topics::kCommandReply, [&](const msg::CommandReply& r, const SampleInfo&) {
+      if (r.client().to_string() != "bench-player") return;
+      std::lock_guard<std::mutex> lock(mu);
+      replay_reply = r;
+      cv.notify_all();
+    });
+    command_writer = std::make_unique<Writer<msg::Command>>(bus, topics::kCommand);
+    client = std::thread([&] {
+      std::unique_lock<std::mutex> lock(mu);
+      if (!cv.wait_for(lock, std::chrono::minutes(30), [&] { return run_over || done_at.count(plain_end); }) || run_over) return;
+      lock.unlock();
+      msg::Command cmd;
+      cmd.client("bench-player");
+      cmd.sequence_number(1);
+      cmd.body(RecorderBody(msg::RecorderAction::REPLAY_START, last_log));
+      command_writer->Write(cmd);
+    });
+  });
+  {
+    std::lock_guard<std::mutex> lock(mu);
+    run_over = true;
+  }
+  cv.notify_all();
+  client.join();
   const std::vector<double>& barrier = run.barrier_us;
   const double run_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   // Block by block: median barrier time of the plain blocks and of the recording ones.
@@ -229,7 +268,6 @@ int main(int argc, char** argv) {
   const double write_us = run.frames_written ? run.write_us / static_cast<double>(run.frames_written) : 0;
   // Log sizes per simulated hour.
   // The long log: its frames and footer per simulated hour (the header is once per log).
-  const std::string last_log = dir + "/long.lslog";
   double mb_per_hour = 0;
   {
     recorder::LogReader log(last_log);
@@ -243,6 +281,40 @@ int main(int argc, char** argv) {
                 mb_per_hour);
   }
   std::fflush(stdout);
+  // Playback against the same world without it: x real time of the plain block's ticks and
+  // of the ticks that showed the log's frames (the reply's frame F shows the first, F + n - 1
+  // the last; F + n ends the replay).
+  double plain_x = 0, playback_x = 0;
+  {
+    recorder::LogReader log(last_log);
+    const uint64_t n = log.frame_count();
+    const double dt = c.world.fixed_delta_seconds();
+    std::lock_guard<std::mutex> lock(mu);
+    auto span = [&](uint64_t from, uint64_t to) -> double {  // wall s from FrameDone(from) to FrameDone(to)
+      if (!done_at.count(from) || !done_at.count(to)) return 0;
+      return std::chrono::duration<double>(done_at[to] - done_at[from]).count();
+    };
+    const double plain_s = span(LongEnd(o), plain_end);
+    plain_x = plain_s > 0 ? static_cast<double>(plain_end - LongEnd(o)) * dt / plain_s : 0;
+    std::string why;
+    if (!replay_reply) {
+      why = "no reply to replay_file";
+    } else if (!replay_reply->accepted()) {
+      why = "replay_file refused: " + replay_reply->reason().to_string();
+    } else {
+      const uint64_t f = replay_reply->frame();
+      const double s = span(f - 1, f + n - 1);
+      if (s > 0) playback_x = static_cast<double>(n) * dt / s;
+      else why = "the run ended before the replay's frames " + std::to_string(f) + ".." + std::to_string(f + n - 1);
+    }
+    std::printf("{\"playback\":\"%s\",\"frames\":%llu,\"reply_frame\":%llu,\"plain_ticks\":%llu,\"plain_x_real_time\":%.2f,"
+                "\"playback_x_real_time\":%.2f,\"playback_over_plain\":%.3f,\"error\":\"%s\"}\n",
+                last_log.c_str(), static_cast<unsigned long long>(n),
+                static_cast<unsigned long long>(replay_reply ? replay_reply->frame() : 0),
+                static_cast<unsigned long long>(plain_end - LongEnd(o)), plain_x, playback_x, plain_x > 0 ? playback_x / plain_x : 0,
+                why.c_str());
+    std::fflush(stdout);
+  }
   // Re-simulation of the last log.
   recorder::LogReader log(last_log);
   const LaunchConfig plan = recorder::ResimulationConfig(log, c);
@@ -265,10 +337,10 @@ int main(int argc, char** argv) {
               "\"median_tick_us_plain\":%.1f,\"median_tick_us_recording\":%.1f,\"tick_cost_ratio\":%.3f,"
               "\"writer_thread_us_per_frame\":%.1f,"
               "\"mb_per_sim_hour\":%.1f,\"resimulation_x_real_time\":%.2f,\"resimulation_hashes_equal\":%s,"
-              "\"playback_x_real_time\":null}\n",
+              "\"plain_x_real_time\":%.2f,\"playback_x_real_time\":%.2f,\"playback_over_plain\":%.3f}\n",
               o.vehicles, o.walkers, run_s, plain_us, rec_us, plain_us > 0 ? rec_us / plain_us : 0, write_us, mb_per_hour,
               resim_sim_s / resim_s,
-              result.ok() ? "true" : "false");
+              result.ok() ? "true" : "false", plain_x, playback_x, plain_x > 0 ? playback_x / plain_x : 0);
   if (!o.keep) std::filesystem::remove_all(dir);
   return result.ok() ? 0 : 1;
 }

@@ -1118,20 +1118,7 @@ void Client::destroy(uint32_t actor) {
   impl_->RemoveActor(actor);
 }
 
-namespace {
-
-msg::CommandBody RecorderBody(msg::RecorderAction action, const std::string& name = "", bool flag = false) {
-  msg::RecorderCommand r;
-  r.action(action);
-  r.name(name);
-  r.flag(flag);
-  msg::CommandBody b;
-  b.recorder(r);
-  return b;
-}
-
-}  // namespace
-
+// The recorder's commands: RecorderBody (lockstep/runtime/command_builders.h).
 std::string Client::start_recorder(const std::string& name, bool additional_data) {
   if (name.empty()) throw ClientError("start_recorder needs a file name");
   if (name.size() > 1024) throw ClientError("start_recorder: the file name is longer than 1024 characters");

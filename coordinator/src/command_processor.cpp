@@ -16,25 +16,70 @@ using msg::CommandKind;
 
 bool Finite(const msg::Vector3& v) { return std::isfinite(v.x()) && std::isfinite(v.y()) && std::isfinite(v.z()); }
 
-std::string CheckPose(const msg::Pose& p, const char* what) {
-  const auto& q = p.orientation();
-  if (!Finite(p.position()) || !std::isfinite(q.w()) || !std::isfinite(q.x()) || !std::isfinite(q.y()) || !std::isfinite(q.z())) {
-    return std::string(what) + " has a NaN or infinite value";
-  }
-  const double n = std::sqrt(q.w() * q.w() + q.x() * q.x() + q.y() * q.y() + q.z() * q.z());
-  if (std::abs(n - 1.0) > 1e-3) {
-    std::ostringstream r;
-    r << what << " orientation is not a unit quaternion (norm " << n << ")";
-    return r.str();
-  }
-  return {};
-}
-
 std::string InRange(const char* name, double v, double lo, double hi) {
   if (!std::isfinite(v)) return std::string(name) + " is NaN or infinite";
   if (v < lo || v > hi) {
     std::ostringstream r;
     r << name << " = " << v << " is outside [" << lo << ", " << hi << "]";
+    return r.str();
+  }
+  return {};
+}
+
+// How far from the map's origin a position may be. Farther is no place in a town, and the
+// physics engines' broad phases overflow (ODE asserts on an AABB beyond int range, and a
+// hostile 1e300 killed ground_sim): refused, as NaN is.
+constexpr double kMaxCoordinate = 1e6;  // m
+
+std::string OutOfWorld(const msg::Vector3& v, const std::string& what) {
+  if (std::abs(v.x()) <= kMaxCoordinate && std::abs(v.y()) <= kMaxCoordinate && std::abs(v.z()) <= kMaxCoordinate) return {};
+  std::ostringstream r;
+  r << what << " (" << v.x() << ", " << v.y() << ", " << v.z() << ") is more than " << kMaxCoordinate
+    << " m from the map's origin";
+  return r.str();
+}
+
+// |v| of a physics command's vector within `max` (its unit by kind).
+std::string NormAtMost(const msg::Vector3& v, double max, const char* what) {
+  const double n = std::sqrt(v.x() * v.x() + v.y() * v.y() + v.z() * v.z());
+  if (n <= max) return {};
+  std::ostringstream r;
+  r << what << " of magnitude " << n << " is above " << max;
+  return r.str();
+}
+
+// carla.VehiclePhysicsControl as the wire carries it: every number finite, a plausible mass
+// (ground_sim checks the rest of its ranges and refuses what it cannot simulate).
+std::string CheckVehiclePhysics(const msg::VehiclePhysicsControl& p) {
+  for (const auto& c : p.torque_curve()) {
+    if (!std::isfinite(c.x()) || !std::isfinite(c.y())) return "torque curve has a NaN or infinite point";
+  }
+  for (const auto& g : p.forward_gears()) {
+    if (!std::isfinite(g.ratio()) || !std::isfinite(g.down_ratio()) || !std::isfinite(g.up_ratio())) {
+      return "forward gears have a NaN or infinite ratio";
+    }
+  }
+  if (!Finite(p.center_of_mass())) return "center_of_mass has a NaN or infinite value";
+  const double scalars[] = {p.max_rpm(), p.moi(), p.damping_rate_full_throttle(), p.gear_switch_time(), p.clutch_strength(),
+                            p.final_ratio(), p.mass(), p.drag_coefficient(), p.tire_friction(), p.wheel_radius(),
+                            p.max_steer_angle(), p.max_brake_torque(), p.max_handbrake_torque(), p.suspension_stiffness(),
+                            p.suspension_damping(), p.wheelbase(), p.track()};
+  for (double v : scalars) {
+    if (!std::isfinite(v)) return "vehicle physics control has a NaN or infinite value";
+  }
+  return InRange("mass", p.mass(), 1, 1e5);
+}
+
+std::string CheckPose(const msg::Pose& p, const char* what) {
+  const auto& q = p.orientation();
+  if (!Finite(p.position()) || !std::isfinite(q.w()) || !std::isfinite(q.x()) || !std::isfinite(q.y()) || !std::isfinite(q.z())) {
+    return std::string(what) + " has a NaN or infinite value";
+  }
+  if (auto r = OutOfWorld(p.position(), std::string(what) + " position"); !r.empty()) return r;
+  const double n = std::sqrt(q.w() * q.w() + q.x() * q.x() + q.y() * q.y() + q.z() * q.z());
+  if (std::abs(n - 1.0) > 1e-3) {
+    std::ostringstream r;
+    r << what << " orientation is not a unit quaternion (norm " << n << ")";
     return r.str();
   }
   return {};
@@ -101,8 +146,10 @@ std::string CommandProcessor::CheckDrone(const msg::DroneCommand& d) const {
   using K = msg::DroneCommandKind;
   if (auto r = CheckActor(d.actor(), msg::ACTOR_DRONE); !r.empty()) return r;
   if (!Finite(d.target())) return "drone target has a NaN or infinite value";
+  if (auto r = OutOfWorld(d.target(), "drone target"); !r.empty()) return r;
   for (const auto& p : d.path()) {
     if (!Finite(p)) return "drone path has a NaN or infinite point";
+    if (auto r = OutOfWorld(p, "drone path point"); !r.empty()) return r;
   }
   for (double v : d.values()) {
     if (!std::isfinite(v)) return "drone values have a NaN or infinite entry";
@@ -308,16 +355,25 @@ std::string CommandProcessor::Check(const msg::Command& cmd, bool synchronous) c
                    InRange("steer_speed", a.steer_speed(), 0, 100), InRange("speed", a.speed(), -100, 100),
                    InRange("acceleration", a.acceleration(), 0, 100), InRange("jerk", a.jerk(), 0, 1e4));
     }
-    case CommandKind::CMD_ACTOR_PHYSICS:
-      if (!actors_.count(b.actor_physics().actor())) return "unknown actor " + std::to_string(b.actor_physics().actor());
-      return Finite(b.actor_physics().value()) ? std::string() : "physics command value has a NaN or infinite entry";
+    case CommandKind::CMD_ACTOR_PHYSICS: {
+      using PK = msg::ActorPhysicsKind;
+      const auto& p = b.actor_physics();
+      if (!actors_.count(p.actor())) return "unknown actor " + std::to_string(p.actor());
+      if (!Finite(p.value())) return "physics command value has a NaN or infinite entry";
+      // Bounds far beyond anything in a town, so that no value sends a body out of the world.
+      switch (p.kind()) {
+        case PK::PHYSICS_SET_TARGET_VELOCITY: return NormAtMost(p.value(), 1e3, "target velocity (m/s)");
+        case PK::PHYSICS_SET_TARGET_ANGULAR_VELOCITY: return NormAtMost(p.value(), 1e3, "target angular velocity (rad/s)");
+        case PK::PHYSICS_ADD_IMPULSE: return NormAtMost(p.value(), 1e7, "impulse (N s)");
+        default: return {};
+      }
+    }
     case CommandKind::CMD_VEHICLE_PHYSICS:
-      return First(CheckActor(b.vehicle_physics().actor(), msg::ACTOR_VEHICLE),
-                   InRange("mass", b.vehicle_physics().physics().mass(), 1, 1e5));
+      return First(CheckActor(b.vehicle_physics().actor(), msg::ACTOR_VEHICLE), CheckVehiclePhysics(b.vehicle_physics().physics()));
     case CommandKind::CMD_WALKER_AI:
       if (!actors_.count(b.walker_ai().actor())) return "unknown actor " + std::to_string(b.walker_ai().actor());
       return First(Finite(b.walker_ai().location()) ? std::string() : "go_to_location has a NaN or infinite value",
-                   InRange("max_speed", b.walker_ai().max_speed(), 0, 10));
+                   OutOfWorld(b.walker_ai().location(), "go_to_location"), InRange("max_speed", b.walker_ai().max_speed(), 0, 10));
     case CommandKind::CMD_PEDESTRIANS:
       if (b.pedestrians().seed_only()) return {};
       return InRange("pedestrians cross factor", b.pedestrians().cross_factor(), 0, 1);

@@ -269,6 +269,13 @@ struct Coordinator::Impl {
     {
       std::lock_guard<std::mutex> lock(mu);
       const std::string name = set.service().to_string();
+      if (const Member* m = members.Find(name); m && m->alive && m->blueprints != set.blueprints().size()) {
+        // A live member declares once, the count it announces: another set under its name
+        // is a second process or a participant that is not it (issue 21, hostile input).
+        spdlog::warn("blueprints of '{}' with {} declaration(s) while the live member announced {}: ignored", name,
+                     set.blueprints().size(), m->blueprints);
+        return;
+      }
       commands.library().Declare(set);
       spdlog::info("service '{}' declares {} blueprint(s)", name, set.blueprints().size());
       if (members.OnBlueprints(name, static_cast<long>(set.blueprints().size()))) status_dirty = true;

@@ -207,8 +207,12 @@ void SensorsService::BeginRun(const msg::WorldInfo& world) {
   // vehicles or walkers come in GroundState, drones in AirState, and each of those
   // services publishes one PhysicsEvents batch per frame.
   const std::vector<std::string> required = RequiredServices(world);
-  if (!declarations_.WaitFor(required, std::chrono::milliseconds(static_cast<int64_t>(options_.input_timeout_s * 1000)))) {
-    throw InputError("sensors: not every required service declared its blueprints within the input timeout");
+  // Declarations come as the services start (render's EGL, a town's meshes): on a loaded
+  // machine that takes longer than a frame's inputs, so the run's service timeout bounds it.
+  const double declare_s = std::max(options_.input_timeout_s, world.settings().service_timeout());
+  if (!declarations_.WaitFor(required, std::chrono::milliseconds(static_cast<int64_t>(declare_s * 1000)))) {
+    throw InputError("sensors: not every required service declared its blueprints within " + std::to_string(declare_s) +
+                     " s (the input timeout, or the run's service_timeout if longer)");
   }
   event_publishers_.clear();
   const auto ground = declarations_.Declaring(msg::ActorKind::ACTOR_VEHICLE, required);

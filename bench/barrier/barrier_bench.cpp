@@ -14,6 +14,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <mutex>
+#include <fstream>
+#include <sstream>
+#include <string>
 #include <sys/wait.h>
 #include <thread>
 #include <vector>
@@ -116,10 +119,50 @@ double FloorRtt(int domain, int rounds) {
   return Percentile(rtt, 0.5);
 }
 
+// What a set of processes has spent so far: CPU time (user + system, every thread) and
+// voluntary context switches (every thread): the wake-ups. On a 2-core machine the barrier
+// is mostly these two: the work per tick and the wake-ups it takes; both depend far less on
+// the load of the machine than the latency does.
+struct Spent {
+  double cpu_us = 0;
+  double switches = 0;
+};
+
+Spent ProcessSpent(pid_t pid) {
+  Spent s;
+  const std::string dir = "/proc/" + std::to_string(pid);
+  std::ifstream stat(dir + "/stat");
+  std::string line;
+  if (std::getline(stat, line)) {
+    const auto close = line.rfind(')');
+    std::istringstream rest(line.substr(close + 2));
+    std::string field;
+    double utime = 0, stime = 0;
+    for (int i = 3; i <= 15 && rest >> field; ++i) {  // fields 14 and 15: utime, stime (clock ticks)
+      if (i == 14) utime = std::stod(field);
+      if (i == 15) stime = std::stod(field);
+    }
+    s.cpu_us = (utime + stime) * 1e6 / static_cast<double>(sysconf(_SC_CLK_TCK));
+  }
+  std::error_code ec;
+  for (const auto& task : std::filesystem::directory_iterator(dir + "/task", ec)) {
+    std::ifstream status(task.path() / "status");
+    while (std::getline(status, line)) {
+      // Voluntary ones only: each is a thread that waits for something (a sample, a lock) and is
+      // woken for it; involuntary ones count the load of the machine, not the barrier's work.
+      if (line.rfind("voluntary_ctxt_switches:", 0) == 0) s.switches += std::stod(line.substr(line.find(':') + 1));
+    }
+  }
+  return s;
+}
+
 struct Result {
   int services;
   size_t ticks;
   double median, p99, tick_rate;
+  double cpu_us_per_tick = 0;       // coordinator and services together, over the timed ticks
+  double coordinator_cpu_us_per_tick = 0;
+  double switches_per_tick = 0;     // voluntary context switches (wake-ups) of those processes per tick
 };
 
 Result Barrier(int domain, int services, uint64_t ticks) {
@@ -135,6 +178,7 @@ Result Barrier(int domain, int services, uint64_t ticks) {
   }
   auto bus = lockstep::CreateDdsBus({domain, "", "lockstep.participant", "bench-coordinator"});
   lockstep::CoordinatorStats stats;
+  Result spent{};
   {
     lockstep::Coordinator coordinator(*bus, config);
     // A run that cannot finish (a service that never joined) ends after 120 s, named.
@@ -142,11 +186,39 @@ Result Barrier(int domain, int services, uint64_t ticks) {
     std::mutex mu;
     std::condition_variable cv;
     bool finished = false;
+    // Counters from when the timed ticks begin (the first 10% are skipped below) to the end.
+    Spent start_self, start_services;
+    uint64_t start_frame = 0;
     std::thread watchdog([&] {
+      const auto deadline = Clock::now() + std::chrono::seconds(120);
       std::unique_lock<std::mutex> lock(mu);
-      if (!cv.wait_for(lock, std::chrono::seconds(120), [&] { return finished; })) stop = true;
+      while (!finished && Clock::now() < deadline) {
+        if (start_frame == 0) {
+          lock.unlock();
+          const uint64_t f = coordinator.stats().frames;
+          if (f >= ticks / 10 && f > 0) {
+            start_self = ProcessSpent(getpid());
+            for (pid_t p : pids) {
+              const Spent x = ProcessSpent(p);
+              start_services.cpu_us += x.cpu_us;
+              start_services.switches += x.switches;
+            }
+            start_frame = f;
+          }
+          lock.lock();
+        }
+        cv.wait_for(lock, std::chrono::milliseconds(start_frame == 0 ? 2 : 100), [&] { return finished; });
+      }
+      if (!finished) stop = true;
     });
     coordinator.Run(stop);
+    const Spent end_self = ProcessSpent(getpid());
+    Spent end_services;
+    for (pid_t p : pids) {
+      const Spent x = ProcessSpent(p);
+      end_services.cpu_us += x.cpu_us;
+      end_services.switches += x.switches;
+    }
     {
       std::lock_guard<std::mutex> lock(mu);
       finished = true;
@@ -154,13 +226,30 @@ Result Barrier(int domain, int services, uint64_t ticks) {
     cv.notify_all();
     watchdog.join();
     stats = coordinator.stats();
+    if (stats.frames > start_frame && start_frame > 0) {
+      const double n = static_cast<double>(stats.frames - start_frame);
+      spent.coordinator_cpu_us_per_tick = (end_self.cpu_us - start_self.cpu_us) / n;
+      spent.cpu_us_per_tick = spent.coordinator_cpu_us_per_tick + (end_services.cpu_us - start_services.cpu_us) / n;
+      spent.switches_per_tick = (end_self.switches - start_self.switches + end_services.switches - start_services.switches) / n;
+    }
     if (stats.frames < ticks) std::fprintf(stderr, "barrier: %d services: only %llu of %llu ticks within 120 s\n", services,
                                            static_cast<unsigned long long>(stats.frames), static_cast<unsigned long long>(ticks));
   }
   Reap(pids);
   // The first ticks include discovery settling: skip 10%.
   std::vector<double> v(stats.barrier_us.begin() + stats.barrier_us.size() / 10, stats.barrier_us.end());
-  return Result{services, v.size(), Percentile(v, 0.5), Percentile(v, 0.99), stats.tick_rate_hz};
+  spent.services = services;
+  spent.ticks = v.size();
+  spent.median = Percentile(v, 0.5);
+  spent.p99 = Percentile(v, 0.99);
+  spent.tick_rate = stats.tick_rate_hz;
+  return spent;
+}
+
+double LoadAverage() {
+  double load = 0;
+  std::ifstream("/proc/loadavg") >> load;
+  return load;
 }
 
 }  // namespace
@@ -175,13 +264,21 @@ int main(int argc, char** argv) {
   std::printf("{\"bench\":\"barrier_floor\",\"floor_rtt_us\":%.1f}\n", floor_us);
   std::fflush(stdout);
   Result four{};
-  for (int n : {1, 2, 8, 4}) {
+  // bench_barrier [TICKS [SERVICES...]]: by default 1, 2, 8 and 4 services (the last line is 4).
+  std::vector<int> counts{1, 2, 8, 4};
+  if (argc > 2) {
+    counts.clear();
+    for (int i = 2; i < argc; ++i) counts.push_back(std::atoi(argv[i]));
+  }
+  for (int n : counts) {
     Result r = Barrier(domain, n, ticks);
     const bool summary = n == 4;
     if (summary) four = r;
     std::printf("{\"bench\":\"barrier\",\"services\":%d,\"ticks\":%zu,\"median_us\":%.1f,\"p99_us\":%.1f,\"floor_rtt_us\":%.1f,"
-                "\"ratio_to_floor\":%.2f,\"tick_rate_hz\":%.0f}\n",
-                r.services, r.ticks, r.median, r.p99, floor_us, floor_us > 0 ? r.median / floor_us : 0, r.tick_rate);
+                "\"ratio_to_floor\":%.2f,\"tick_rate_hz\":%.0f,\"cpu_us_per_tick\":%.1f,\"coordinator_cpu_us_per_tick\":%.1f,"
+                "\"switches_per_tick\":%.1f,\"load\":%.2f}\n",
+                r.services, r.ticks, r.median, r.p99, floor_us, floor_us > 0 ? r.median / floor_us : 0, r.tick_rate, r.cpu_us_per_tick,
+                r.coordinator_cpu_us_per_tick, r.switches_per_tick, LoadAverage());
     std::fflush(stdout);
   }
   (void)four;

@@ -3,6 +3,8 @@ sequences, the footprint measurement on CARLA's Town01, and real episodes on a
 simulation of our own (ground_sim + sensors on Town01, 10 frames per second) that end by
 success, by time-out and by collision, each counted as CARLA's benchmark counts it."""
 
+import contextlib
+
 import pytest
 
 from conftest import DOMAIN, has_service
@@ -180,6 +182,21 @@ def straight_episode(ctx, length=60.0, index=5):
             'path': [[g.location.x, g.location.y, g.location.z]]}, wp
 
 
+@contextlib.contextmanager
+def parked_ahead(ctx, wp, metres=25.0):
+    """A car parked in the lane of waypoint `wp`, `metres` ahead of it, for the block."""
+    import carla
+    ahead = wp.next(metres)[0].transform
+    parked = ctx.world.spawn_actor(ctx.lib.find('vehicle.audi.a2'),
+                                   carla.Transform(ahead.location + carla.Location(z=0.3), ahead.rotation))
+    try:
+        ctx.world.tick()
+        yield parked
+    finally:
+        parked.destroy()
+        ctx.world.tick()
+
+
 class Throttle:
     """Full speed ahead: no brakes for what is in front."""
     name = 'throttle'
@@ -222,13 +239,8 @@ def test_episode_ends_by_time_out(ctx):
 
 @needs_ground
 def test_episode_ends_by_collision_and_counts_it(ctx):
-    import carla
     ep, wp = straight_episode(ctx)
-    ahead = wp.next(25.0)[0].transform
-    parked = ctx.world.spawn_actor(ctx.lib.find('vehicle.audi.a2'),
-                                   carla.Transform(ahead.location + carla.Location(z=0.3), ahead.rotation))
-    try:
-        ctx.world.tick()
+    with parked_ahead(ctx, wp):
         # NoCrash: the collision ends the episode.
         r, rows = runner.run_episode(ctx, Throttle(), ep, task='Regular', weather=1, collision_as_failure=True,
                                      dynamic=True)
@@ -236,9 +248,6 @@ def test_episode_ends_by_collision_and_counts_it(ctx):
         assert rows[-1]['collision_vehicles'] - rows[-2]['collision_vehicles'] > 200.0
         assert rows[-1]['collision_other'] == 0.0 and rows[-1]['collision_pedestrians'] == 0.0
         assert r['collision_vehicles'] == 1 and r['collision_other'] == 0
-    finally:
-        parked.destroy()
-        ctx.world.tick()
 
 
 class HitAndBrake(Throttle):
@@ -263,13 +272,8 @@ class HitAndBrake(Throttle):
 
 @needs_ground
 def test_collision_counted_in_a_dynamic_task(ctx):
-    import carla
     ep, wp = straight_episode(ctx)
-    ahead = wp.next(25.0)[0].transform
-    parked = ctx.world.spawn_actor(ctx.lib.find('vehicle.audi.a2'),
-                                   carla.Transform(ahead.location + carla.Location(z=0.3), ahead.rotation))
-    try:
-        ctx.world.tick()
+    with parked_ahead(ctx, wp) as parked:
         # CoRL 2017: infractions never end an episode. One hit, then the brake: one car collision.
         r, rows = runner.run_episode(ctx, HitAndBrake(parked), ep, task='Nav. dynamic', weather=1, dynamic=True,
                                      time_out=8.0)
@@ -279,22 +283,13 @@ def test_collision_counted_in_a_dynamic_task(ctx):
         assert r['collision_other'] == 0 and r['collision_pedestrians'] == 0
         # The same frames in a task without traffic record no collision (0.8's dynamic_tasks).
         assert metrics.episode_infractions(rows, dynamic=False)['collision_vehicles'] == 0
-    finally:
-        parked.destroy()
-        ctx.world.tick()
     # Pushing a car along for seconds is contact all the time: 0.8 counts it again after
     # each 30-frame recount while the impulse keeps rising by > 400 per 10 frames.
-    parked = ctx.world.spawn_actor(ctx.lib.find('vehicle.audi.a2'),
-                                   carla.Transform(ahead.location + carla.Location(z=0.3), ahead.rotation))
-    try:
-        ctx.world.tick()
+    with parked_ahead(ctx, wp):
         r, rows = runner.run_episode(ctx, Throttle(), ep, task='Nav. dynamic', weather=1, dynamic=True, time_out=8.0)
         hits = [i for i in range(1, len(rows)) if rows[i]['collision_vehicles'] > rows[i - 1]['collision_vehicles']]
         assert len(hits) > 15 and hits[-1] - hits[0] > 30
         assert r['collision_vehicles'] >= 2
-    finally:
-        parked.destroy()
-        ctx.world.tick()
 
 
 @needs_ground

@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 
+import test_benchmarks as tb   # its episode and parked-car helpers (a module alias: pytest collects no test twice)
 from conftest import DOMAIN, has_service
 
 from lockstep.benchmarks import modular, runner
@@ -82,20 +83,9 @@ def ctx(tmp_path_factory):
         sim.stop()
 
 
-def straight(ctx, length=50.0, index=5):
-    m = ctx.map
-    wp = m.get_waypoint(m.get_spawn_points()[index].location)
-    goal = wp.next(length)[0]
-    t, g = wp.transform, goal.transform
-    return {'id': 0, 'start': [t.location.x, t.location.y, t.location.z, t.rotation.yaw],
-            'goal': [g.location.x, g.location.y, g.location.z, g.rotation.yaw], 'route_m': length,
-            'path': [[g.location.x, g.location.y, g.location.z]]}, wp
-
-
 @needs_render
 def test_modular_agent_drives_to_the_goal_and_stops_for_a_car(ctx):
-    import carla
-    ep, wp = straight(ctx)
+    ep, wp = tb.straight_episode(ctx, 50.0)
     agent = runner.make_agent('modular')
     r, rows = runner.run_episode(ctx, agent, ep, task='Straight', weather=1)
     assert r['end'] == 'success', r
@@ -103,11 +93,8 @@ def test_modular_agent_drives_to_the_goal_and_stops_for_a_car(ctx):
     assert max(x['intersection_offroad'] for x in rows) < 0.05 and r['intersection_otherlane'] == 0
     assert max(x['speed_kmh'] for x in rows) > 15.0
     # A car parked in the lane 30 m ahead: the pipeline sees it and stops short (hazard stop).
-    ahead = wp.next(30.0)[0].transform
-    parked = ctx.world.spawn_actor(ctx.lib.find('vehicle.audi.a2'),
-                                   carla.Transform(ahead.location + carla.Location(z=0.3), ahead.rotation))
-    try:
-        ctx.world.tick()
+    import carla
+    with tb.parked_ahead(ctx, wp, 30.0) as parked:
         agent = runner.make_agent('modular')
         r, rows = runner.run_episode(ctx, agent, ep, task='Nav. dynamic', weather=1, dynamic=True, time_out=12.0)
         assert r['end'] == 'time-out' and r['collision_vehicles'] == 0, r
@@ -115,6 +102,3 @@ def test_modular_agent_drives_to_the_goal_and_stops_for_a_car(ctx):
         assert agent.stats[modular.HAZARD_STOP] > 10
         gap = parked.get_location().distance(carla.Location(rows[-1]['pos_x'], rows[-1]['pos_y'], 0.0))
         assert rows[-1]['speed_kmh'] < 1.0 and 4.5 < gap < 15.0, (gap, rows[-1])
-    finally:
-        parked.destroy()
-        ctx.world.tick()

@@ -50,23 +50,16 @@ def sweep(ctx, air, out, presets, width=320, height=240, fov=90.0, altitude=15.0
         car = ctx.world.spawn_actor(ctx.lib.find('vehicle.audi.a2'), carla.Transform(
             ahead.location + carla.Location(z=0.3), ahead.rotation))
         actors.append(car)
-        sx, sy = ahead.location.x, ahead.location.y
-        yaw = math.radians(syaw)
-        spawn = carla.Transform(carla.Location(sx - 6.0 * math.sin(yaw), sy + 6.0 * math.cos(yaw), sz + 0.2),
-                                carla.Rotation(yaw=syaw))
-        bp = ctx.lib.find('drone.generic_quad')
-        bp.set_attribute('role_name', 'crossview_drone')
-        drone = ctx.world.spawn_actor(bp, spawn)
+        drone, spawn = runner.drone_beside(ctx, carla.Location(ahead.location.x, ahead.location.y, sz), syaw,
+                                           'crossview_drone')
         actors.append(drone)
         for _ in range(10):
             ctx.world.tick()
         for v in (ego, car):
             v.apply_control(carla.VehicleControl(hand_brake=True))
-        air.enableApiControl(True, 'crossview_drone')
-        air.armDisarm(True, 'crossview_drone')
-        air.takeoffAsync(vehicle_name='crossview_drone').join()
+        runner.take_off(air, 'crossview_drone')
         c = car.get_location()
-        target = (spawn.location.y - c.y, c.x - spawn.location.x, -(c.z + altitude - spawn.location.z))
+        target = runner.ned(spawn, c, altitude)
         # Up over the car: until within 0.3 m of the station above it and nearly at rest.
         for _ in range(int(60 / DT)):
             air.trackTargetAsync(target, (0.0, 0.0, 0.0), 8.0, 1.0, vehicle_name='crossview_drone')
@@ -125,15 +118,10 @@ def sweep(ctx, air, out, presets, width=320, height=240, fov=90.0, altitude=15.0
                 cam.stop()
             except Exception:  # noqa: BLE001
                 pass
-        try:
-            air.enableApiControl(False, 'crossview_drone')
-        except Exception:  # noqa: BLE001
-            pass
-        runner.destroy(ctx, actors)
-        ctx.world.tick()
+        runner.release(ctx, actors, air, 'crossview_drone')
 
 
-def contact_sheet(out, records, path, columns=7):
+def contact_sheet(out, records, path, columns=7, dpi=80):
     """Every preset's ground image over its aerial image, in a grid (matplotlib)."""
     import matplotlib
     matplotlib.use('Agg')
@@ -149,7 +137,7 @@ def contact_sheet(out, records, path, columns=7):
                 axes[2 * r + k][c].imshow(plt.imread(os.path.join(out, rec[view + '_image'])))
         axes[2 * r][c].set_title(rec['preset'], fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=80)
+    fig.savefig(path, dpi=dpi)
     plt.close(fig)
 
 
@@ -159,14 +147,11 @@ def main(argv=None):
     ap.add_argument('--width', type=int, default=320)
     ap.add_argument('--height', type=int, default=240)
     ap.add_argument('--altitude', type=float, default=15.0)
-    ap.add_argument('--domain', type=int, default=int(os.environ.get('LOCKSTEP_DOMAIN', '0') or 0))
-    ap.add_argument('--out', default='')
+    runner.workload_args(ap, connect=False)
     args = ap.parse_args(argv)
     presets = args.presets.split(',') if args.presets else [runner.WEATHERS[k] for k in sorted(runner.WEATHERS)]
-    out = args.out or os.path.join(os.path.dirname(runner.build_dir()), 'out', 'benchmarks', 'crossview')
-    os.makedirs(out, exist_ok=True)
-    os.environ['LOCKSTEP_DOMAIN'] = str(args.domain)
-    sim = runner.Simulation('Town01', args.domain, out, dt=DT, air=True, cameras=True)
+    out = runner.out_dir(args.out, 'crossview')
+    sim = runner.own_simulation('Town01', args.domain, out, dt=DT, air=True, cameras=True)
     try:
         import airsim
         ctx = runner.Context(dt=DT)

@@ -93,12 +93,7 @@ def record(ctx, air, out, ticks, width=400, height=300, fov=90.0, seed=0, every=
         car = ctx.world.spawn_actor(ctx.ego_blueprint(), carla.Transform(carla.Location(sx, sy, sz + 0.3),
                                                                          carla.Rotation(yaw=syaw)))
         actors.append(car)
-        yaw = math.radians(syaw)
-        spawn = carla.Transform(carla.Location(sx - 6.0 * math.sin(yaw), sy + 6.0 * math.cos(yaw), sz + 0.2),
-                                carla.Rotation(yaw=syaw))
-        bp = ctx.lib.find('drone.generic_quad')
-        bp.set_attribute('role_name', 'dataset_drone')
-        drone = ctx.world.spawn_actor(bp, spawn)
+        drone, spawn = runner.drone_beside(ctx, carla.Location(sx, sy, sz), syaw, 'dataset_drone')
         actors.append(drone)
         parents = {'car': car, 'drone': drone}
         sensors = {}
@@ -122,9 +117,7 @@ def record(ctx, air, out, ticks, width=400, height=300, fov=90.0, seed=0, every=
         actors += list(sensors.values())
         for _ in range(20):
             ctx.world.tick()
-        air.enableApiControl(True, 'dataset_drone')
-        air.armDisarm(True, 'dataset_drone')
-        air.takeoffAsync(vehicle_name='dataset_drone').join()
+        runner.take_off(air, 'dataset_drone')
         tm = ctx.client.get_trafficmanager()
         car.set_autopilot(True, tm.get_port())
         tm.auto_lane_change(car, False)
@@ -143,14 +136,12 @@ def record(ctx, air, out, ticks, width=400, height=300, fov=90.0, seed=0, every=
                   for n in sensors}
         times = open(os.path.join(out, 'times.txt'), 'w')
 
-        def ned(loc, up):
-            return (spawn.location.y - loc.y, loc.x - spawn.location.x, -(loc.z + up - spawn.location.z))
-
         started = time.time()
         written = 0
         for k in range(ticks):
             c, v = car.get_location(), car.get_velocity()
-            air.trackTargetAsync(ned(c, 10.0), (-v.y, v.x, -v.z), 12.0, 1.0, vehicle_name='dataset_drone')
+            air.trackTargetAsync(runner.ned(spawn, c, 10.0), runner.ned_velocity(v), 12.0, 1.0,
+                                 vehicle_name='dataset_drone')
             frame = ctx.world.tick()
             snap = ctx.world.get_snapshot()
             samples = {}
@@ -192,12 +183,7 @@ def record(ctx, air, out, ticks, width=400, height=300, fov=90.0, seed=0, every=
         return {'ticks': ticks, 'indices': written, 'wall_s': round(wall, 2), 'ticks_per_s': round(ticks / wall, 2),
                 'sensors': len(sensors), 'image_size': [width, height]}
     finally:
-        try:
-            air.enableApiControl(False, 'dataset_drone')
-        except Exception:  # noqa: BLE001
-            pass
-        runner.destroy(ctx, actors)
-        ctx.world.tick()
+        runner.release(ctx, actors, air, 'dataset_drone')
 
 
 def _read_stamps(path):
@@ -234,16 +220,10 @@ def main(argv=None):
     ap.add_argument('--ticks', type=int, default=200)
     ap.add_argument('--width', type=int, default=400)
     ap.add_argument('--height', type=int, default=300)
-    ap.add_argument('--domain', type=int, default=int(os.environ.get('LOCKSTEP_DOMAIN', '0') or 0))
-    ap.add_argument('--connect', action='store_true')
-    ap.add_argument('--out', default='')
+    runner.workload_args(ap)
     args = ap.parse_args(argv)
-    out = args.out or os.path.join(os.path.dirname(runner.build_dir()), 'out', 'benchmarks', 'dataset')
-    sim = None
-    if not args.connect:
-        os.environ['LOCKSTEP_DOMAIN'] = str(args.domain)
-        os.makedirs(out, exist_ok=True)
-        sim = runner.Simulation('Town01', args.domain, out, dt=0.05, air=True, cameras=True)
+    out = runner.out_dir(args.out, 'dataset')
+    sim = None if args.connect else runner.own_simulation('Town01', args.domain, out, dt=0.05, air=True, cameras=True)
     try:
         import airsim
         ctx = runner.Context(dt=0.05)

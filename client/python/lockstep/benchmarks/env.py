@@ -51,7 +51,7 @@ def _wrap_deg(a):
     return (a + 180.0) % 360.0 - 180.0
 
 
-class DrivingEnv:
+class DrivingEnv(runner.SimulationEnv):
     metadata = {'render_modes': []}
 
     def __init__(self, town='Town01', domain=None, connect=False, task='Navigation', vehicles=0, walkers=0,
@@ -98,10 +98,7 @@ class DrivingEnv:
 
     def reset(self, seed=None, options=None):
         carla = self.ctx.carla
-        if seed is not None:
-            self._rng = random.Random(seed)
-            self.action_space.seed(seed)
-            self.observation_space.seed(seed)
+        self._reseed(seed)
         self._clear()
         options = options or {}
         idx = options.get('episode', self._rng.randrange(len(self.episodes)))
@@ -177,15 +174,6 @@ class DrivingEnv:
         info['collision'] = collided
         return self._obs(), float(reward), bool(terminated), bool(truncated), info
 
-    def close(self):
-        try:
-            if self.ctx is not None:
-                self._clear()
-        finally:
-            self.ctx = None
-            if self.sim is not None:
-                self.sim.stop()
-                self.sim = None
 
 
 from .follow import DroneFollowEnv  # noqa: E402 - the drone's environment, beside the car's

@@ -49,7 +49,7 @@ def follow_reward(error_m, lost, ticks_left=0):
     return sum(terms.values()), terms
 
 
-class DroneFollowEnv:
+class DroneFollowEnv(runner.SimulationEnv):
     metadata = {'render_modes': []}
 
     def __init__(self, town='Town01', domain=None, connect=False, offset=(0.0, 0.0, 8.0), max_steps=200,
@@ -78,20 +78,12 @@ class DroneFollowEnv:
 
     def _clear(self):
         if self._actors:
-            try:
-                self.air.enableApiControl(False, self.name)
-            except Exception:  # noqa: BLE001 - the drone may be gone
-                pass
-            runner.destroy(self.ctx, self._actors)
-            self.ctx.world.tick()
+            runner.release(self.ctx, self._actors, self.air, self.name)
         self._actors, self.car, self.drone = [], None, None
 
     def reset(self, seed=None, options=None):
         carla = self.ctx.carla
-        if seed is not None:
-            self._rng = random.Random(seed)
-            self.action_space.seed(seed)
-            self.observation_space.seed(seed)
+        self._reseed(seed)
         self._clear()
         options = options or {}
         ep = self.routes[options.get('route', self._rng.randrange(len(self.routes)))]
@@ -102,18 +94,11 @@ class DroneFollowEnv:
         self._actors.append(self.car)
         self._count += 1
         self.name = 'follower%d' % self._count
-        yaw = math.radians(syaw)
-        spawn = carla.Transform(carla.Location(sx - 6.0 * math.sin(yaw), sy + 6.0 * math.cos(yaw), sz + 0.2),
-                                carla.Rotation(yaw=syaw))
-        bp = self.ctx.lib.find('drone.generic_quad')
-        bp.set_attribute('role_name', self.name)
-        self.drone = self.ctx.world.spawn_actor(bp, spawn)
+        self.drone, _ = runner.drone_beside(self.ctx, carla.Location(sx, sy, sz), syaw, self.name)
         self._actors.append(self.drone)
         for _ in range(10):
             self.ctx.world.tick()
-        self.air.enableApiControl(True, self.name)
-        self.air.armDisarm(True, self.name)
-        self.air.takeoffAsync(vehicle_name=self.name).join()
+        runner.take_off(self.air, self.name)
         tm = self.ctx.client.get_trafficmanager()
         self.car.set_autopilot(True, tm.get_port())
         tm.auto_lane_change(self.car, False)
@@ -165,15 +150,6 @@ class DroneFollowEnv:
         return obs, float(reward), bool(lost), bool(truncated), {'error_m': err, 'reward_terms': terms,
                                                                  'steps': self.steps}
 
-    def close(self):
-        try:
-            if self.ctx is not None:
-                self._clear()
-        finally:
-            self.ctx = None
-            if self.sim is not None:
-                self.sim.stop()
-                self.sim = None
 
 
 # ---------------------------------------------------------------- training
@@ -227,11 +203,9 @@ def main(argv=None):
     ap.add_argument('--episodes', type=int, default=1, help='seeded episodes per candidate')
     ap.add_argument('--steps', type=int, default=200, help='ticks per episode (20 per simulated second)')
     ap.add_argument('--seed', type=int, default=0)
-    ap.add_argument('--domain', type=int, default=int(os.environ.get('LOCKSTEP_DOMAIN', '0') or 0))
-    ap.add_argument('--out', default='')
+    runner.workload_args(ap, connect=False)
     args = ap.parse_args(argv)
-    out = args.out or os.path.join(os.path.dirname(runner.build_dir()), 'out', 'benchmarks', 'follow')
-    os.makedirs(out, exist_ok=True)
+    out = runner.out_dir(args.out, 'follow')
     env = DroneFollowEnv(domain=args.domain, max_steps=args.steps, out_dir=out, seed=args.seed)
     started = time.time()
     try:

@@ -9,7 +9,6 @@ GPU).
 """
 import argparse
 import json
-import math
 import os
 import random
 import sys
@@ -34,19 +33,12 @@ def run(ctx, air, ticks, width, height, vehicles=100, walkers=50, seed=0, warmup
     try:
         car = ctx.world.spawn_actor(ctx.ego_blueprint(), start)
         actors.append(car)
-        yaw = math.radians(start.rotation.yaw)
-        spawn = carla.Transform(start.location + carla.Location(-6.0 * math.sin(yaw), 6.0 * math.cos(yaw), 0.2),
-                                start.rotation)
-        bp = ctx.lib.find('drone.generic_quad')
-        bp.set_attribute('role_name', 'joint_drone')
-        drone = ctx.world.spawn_actor(bp, spawn)
+        drone, spawn = runner.drone_beside(ctx, carla.Location(sx, sy, sz), syaw, 'joint_drone')
         actors.append(drone)
         for _ in range(20):
             ctx.world.tick()
         # The drone up first, then the traffic (a crowd around it kept it from taking off once).
-        air.enableApiControl(True, 'joint_drone')
-        air.armDisarm(True, 'joint_drone')
-        air.takeoffAsync(vehicle_name='joint_drone').join()
+        runner.take_off(air, 'joint_drone')
         actors += runner.spawn_traffic(ctx, rng, vehicles, walkers, (start.location.x, start.location.y))
         n_vehicles = sum(1 for a in actors if a.type_id.startswith('vehicle.'))
         n_walkers = sum(1 for a in actors if a.type_id.startswith('walker.'))
@@ -73,12 +65,10 @@ def run(ctx, air, ticks, width, height, vehicles=100, walkers=50, seed=0, warmup
         for i, s in enumerate(sensors):
             s.listen(lambda data, i=i: counts.__setitem__(i, counts[i] + 1))
 
-        def ned(loc, up):
-            return (spawn.location.y - loc.y, loc.x - spawn.location.x, -(loc.z + up - spawn.location.z))
-
         def step():
             c, v = car.get_location(), car.get_velocity()
-            air.trackTargetAsync(ned(c, 10.0), (-v.y, v.x, -v.z), 12.0, 1.0, vehicle_name='joint_drone')
+            air.trackTargetAsync(runner.ned(spawn, c, 10.0), runner.ned_velocity(v), 12.0, 1.0,
+                                 vehicle_name='joint_drone')
             ctx.world.tick()
 
         for _ in range(warmup):
@@ -97,12 +87,7 @@ def run(ctx, air, ticks, width, height, vehicles=100, walkers=50, seed=0, warmup
                 'cameras': len(GROUND) + len(AERIAL), 'image_size': [width, height], 'sensors': len(sensors),
                 'every_sensor_every_tick': every, 'carla_air_fps': 19.8}
     finally:
-        try:
-            air.enableApiControl(False, 'joint_drone')
-        except Exception:  # noqa: BLE001
-            pass
-        runner.destroy(ctx, actors)
-        ctx.world.tick()
+        runner.release(ctx, actors, air, 'joint_drone')
 
 
 def main(argv=None):
@@ -111,13 +96,10 @@ def main(argv=None):
     ap.add_argument('--width', type=int, default=1280)
     ap.add_argument('--height', type=int, default=720)
     ap.add_argument('--town', default='Town01')
-    ap.add_argument('--domain', type=int, default=int(os.environ.get('LOCKSTEP_DOMAIN', '0') or 0))
-    ap.add_argument('--out', default='')
+    runner.workload_args(ap, connect=False)
     args = ap.parse_args(argv)
-    out = args.out or os.path.join(os.path.dirname(runner.build_dir()), 'out', 'benchmarks', 'joint')
-    os.makedirs(out, exist_ok=True)
-    os.environ['LOCKSTEP_DOMAIN'] = str(args.domain)
-    sim = runner.Simulation(args.town, args.domain, out, dt=0.05, air=True, cameras=True)
+    out = runner.out_dir(args.out, 'joint')
+    sim = runner.own_simulation(args.town, args.domain, out, dt=0.05, air=True, cameras=True)
     try:
         import airsim
         ctx = runner.Context(dt=0.05)

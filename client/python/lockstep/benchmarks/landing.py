@@ -38,20 +38,12 @@ def run_once(ctx, air, seed, episodes, time_out_s=90.0, log=None):
     car = ctx.world.spawn_actor(ctx.ego_blueprint(), carla.Transform(carla.Location(sx, sy, sz + 0.3),
                                                                      carla.Rotation(yaw=syaw)))
     name = 'lander%d' % seed
-    yaw = math.radians(syaw)
-    # 6 m to the car's right, beside the road (CARLA's y grows to the right of a car at yaw 0)
-    spawn = carla.Transform(carla.Location(sx - 6.0 * math.sin(yaw), sy + 6.0 * math.cos(yaw), sz + 0.2),
-                            carla.Rotation(yaw=syaw))
-    bp = ctx.lib.find('drone.generic_quad')
-    bp.set_attribute('role_name', name)
-    drone = ctx.world.spawn_actor(bp, spawn)
+    drone, spawn = runner.drone_beside(ctx, carla.Location(sx, sy, sz), syaw, name)
     out = {'seed': seed, 'episode': ep['id'], 'car_speed_kmh': round(speed_kmh, 2), 'touchdown': False}
     try:
         for _ in range(20):
             ctx.world.tick()
-        air.enableApiControl(True, name)
-        air.armDisarm(True, name)
-        air.takeoffAsync(vehicle_name=name).join()
+        runner.take_off(air, name)
         tm = ctx.client.get_trafficmanager()
         car.set_autopilot(True, tm.get_port())
         tm.auto_lane_change(car, False)
@@ -62,15 +54,13 @@ def run_once(ctx, air, seed, episodes, time_out_s=90.0, log=None):
                           if math.hypot(p[0] - sx, p[1] - sy) > 10.0][:256] or [carla.Location(*ep['goal'][:3])])
         roof_dz = car.bounding_box.location.z + car.bounding_box.extent.z
 
-        def ned(loc, up):
-            return (spawn.location.y - loc.y, loc.x - spawn.location.x, -(loc.z + up - spawn.location.z))
-
         height, aligned_s, descending, t = START_HEIGHT, 0.0, False, 0.0
         stamp_before = 0
         t_descent = None
         while t < time_out_s:
             c, v = car.get_location(), car.get_velocity()
-            air.trackTargetAsync(ned(c, roof_dz + height), (-v.y, v.x, -v.z), 12.0, 1.0, vehicle_name=name)
+            air.trackTargetAsync(runner.ned(spawn, c, roof_dz + height), runner.ned_velocity(v), 12.0, 1.0,
+                                 vehicle_name=name)
             ctx.world.tick()
             t += DT
             c = car.get_location()
@@ -100,12 +90,7 @@ def run_once(ctx, air, seed, episodes, time_out_s=90.0, log=None):
         else:
             out['error_m'] = None
     finally:
-        try:
-            air.enableApiControl(False, name)
-        except Exception:  # noqa: BLE001 - the drone may be gone
-            pass
-        runner.destroy(ctx, [drone, car])
-        ctx.world.tick()
+        runner.release(ctx, [drone, car], air, name)
     return out
 
 
@@ -113,16 +98,10 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split('\n')[0])
     ap.add_argument('--runs', type=int, default=20)
     ap.add_argument('--seed', type=int, default=0)
-    ap.add_argument('--domain', type=int, default=int(os.environ.get('LOCKSTEP_DOMAIN', '0') or 0))
-    ap.add_argument('--connect', action='store_true')
-    ap.add_argument('--out', default='')
+    runner.workload_args(ap)
     args = ap.parse_args(argv)
-    out = args.out or os.path.join(os.path.dirname(runner.build_dir()), 'out', 'benchmarks', 'landing')
-    os.makedirs(out, exist_ok=True)
-    sim = None
-    if not args.connect:
-        os.environ['LOCKSTEP_DOMAIN'] = str(args.domain)
-        sim = runner.Simulation('Town01', args.domain, out, dt=DT, air=True)
+    out = runner.out_dir(args.out, 'landing')
+    sim = None if args.connect else runner.own_simulation('Town01', args.domain, out, dt=DT, air=True)
     try:
         import airsim
         ctx = runner.Context(dt=DT)

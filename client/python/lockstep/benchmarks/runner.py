@@ -90,14 +90,108 @@ class Simulation:
 
     def stop(self):
         self.native = None
-        if self.proc.poll() is None:
-            self.proc.send_signal(signal.SIGINT)
-            try:
-                self.proc.wait(20)
-            except subprocess.TimeoutExpired:
-                self.proc.kill()
-                self.proc.wait()
+        stop_process(self.proc)
         self.log.close()
+
+
+def stop_process(proc, grace_s=20.0):
+    """Ctrl-C for a child (`lockstep up` stops its services and prints its summary), then
+    SIGKILL if it is still there after grace_s; returns its exit status."""
+    for sig, wait_s in ((signal.SIGINT, grace_s), (signal.SIGKILL, None)):
+        if proc.poll() is not None:
+            break
+        proc.send_signal(sig)
+        try:
+            proc.wait(wait_s)
+        except subprocess.TimeoutExpired:
+            pass
+    return proc.returncode
+
+
+def out_dir(given, name):
+    """`given`, else out/benchmarks/<name> beside the build folder; created."""
+    out = given or os.path.join(os.path.dirname(build_dir()), 'out', 'benchmarks', name)
+    os.makedirs(out, exist_ok=True)
+    return out
+
+
+def own_simulation(town, domain, out, **kwargs):
+    """A Simulation on `domain`, which this process's carla and airsim clients then use."""
+    os.environ['LOCKSTEP_DOMAIN'] = str(domain)
+    return Simulation(town, domain, out, **kwargs)
+
+
+def drone_beside(ctx, location, yaw_deg, role_name, side_m=6.0):
+    """A drone.generic_quad `side_m` to the right of a pose on the road (clear of the lane,
+    CARLA's y grows to the right of a car at yaw 0); returns (drone, its spawn transform)."""
+    carla = ctx.carla
+    yaw = math.radians(yaw_deg)
+    spawn = carla.Transform(carla.Location(location.x - side_m * math.sin(yaw), location.y + side_m * math.cos(yaw),
+                                           location.z + 0.2), carla.Rotation(yaw=yaw_deg))
+    bp = ctx.lib.find('drone.generic_quad')
+    bp.set_attribute('role_name', role_name)
+    return ctx.world.spawn_actor(bp, spawn), spawn
+
+
+def take_off(air, name):
+    air.enableApiControl(True, name)
+    air.armDisarm(True, name)
+    air.takeoffAsync(vehicle_name=name).join()
+
+
+def ned(spawn, loc, up=0.0):
+    """AirSim's NED position (from the drone's spawn) of a CARLA location `up` m above it."""
+    return (spawn.location.y - loc.y, loc.x - spawn.location.x, -(loc.z + up - spawn.location.z))
+
+
+def ned_velocity(v):
+    return (-v.y, v.x, -v.z)
+
+
+def release(ctx, actors, air=None, drone_name=None):
+    """The end of a run with a drone: API control given back (the drone may be gone), the
+    actors destroyed, one tick so that they are gone."""
+    if air is not None:
+        try:
+            air.enableApiControl(False, drone_name)
+        except Exception:  # noqa: BLE001 - the drone may be gone
+            pass
+    destroy(ctx, actors)
+    ctx.world.tick()
+
+
+def workload_args(ap, connect=True):
+    """The options every workload's command has: --domain, --out (and --connect)."""
+    ap.add_argument('--domain', type=int, default=int(os.environ.get('LOCKSTEP_DOMAIN', '0') or 0))
+    if connect:
+        ap.add_argument('--connect', action='store_true', help='use the simulation already running')
+    ap.add_argument('--out', default='')
+    return ap
+
+
+class SimulationEnv:
+    """What the environments share: reseeding, and close() that clears the episode's actors
+    and stops the environment's own simulation (none with connect=True)."""
+    ctx = sim = None
+
+    def _clear(self):
+        pass
+
+    def _reseed(self, seed):
+        if seed is not None:
+            self._rng = random.Random(seed)
+            self.action_space.seed(seed)
+            self.observation_space.seed(seed)
+
+    def close(self):
+        try:
+            if self.ctx is not None:
+                self._clear()
+        finally:
+            self.ctx = None
+            if self.sim is not None:
+                self.sim.stop()
+                self.sim = None
 
 
 def _end_with_parent():

@@ -267,7 +267,7 @@ def generate(ctx, out, episodes, width=400, height=300, fov=90.0, altitude=60.0)
     return pairs
 
 
-def figure(out, pair, path):
+def figure(out, pair, path, dpi=80):
     """One pair as a picture: the instruction, and each keypoint's ground view over its aerial view."""
     import textwrap
     import matplotlib
@@ -284,7 +284,7 @@ def figure(out, pair, path):
         axes[0][i].set_title('%s, %.0f m' % (k['kind'].replace('_', ' '), k['route_m']), fontsize=8)
     fig.suptitle('\n'.join(textwrap.wrap(pair['instruction'], 110)), fontsize=8)
     fig.tight_layout()
-    fig.savefig(path, dpi=80)
+    fig.savefig(path, dpi=dpi)
     plt.close(fig)
 
 
@@ -294,13 +294,10 @@ def main(argv=None):
     ap.add_argument('--task', default='Navigation', help="the CoRL 2017 task whose episodes are the routes")
     ap.add_argument('--town', default='Town01')
     ap.add_argument('--altitude', type=float, default=60.0)
-    ap.add_argument('--domain', type=int, default=int(os.environ.get('LOCKSTEP_DOMAIN', '0') or 0))
-    ap.add_argument('--out', default='')
+    runner.workload_args(ap, connect=False)
     args = ap.parse_args(argv)
-    out = args.out or os.path.join(os.path.dirname(runner.build_dir()), 'out', 'benchmarks', 'vln')
-    os.makedirs(out, exist_ok=True)
-    os.environ['LOCKSTEP_DOMAIN'] = str(args.domain)
-    sim = runner.Simulation(args.town, args.domain, out, dt=0.05, cameras=True)
+    out = runner.out_dir(args.out, 'vln')
+    sim = runner.own_simulation(args.town, args.domain, out, dt=0.05, cameras=True)
     try:
         ctx = runner.Context(dt=0.05)
         _, tasks = episodes_mod.load(args.town)

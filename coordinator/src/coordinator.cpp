@@ -4,21 +4,16 @@
 #include <chrono>
 #include <condition_variable>
 #include <deque>
-#include <filesystem>
 #include <functional>
-#include <fstream>
 #include <map>
 #include <mutex>
 #include <optional>
 #include <set>
-#include <sstream>
 
 #include "lockstep/coordinator/command_processor.h"
 #include "lockstep/coordinator/membership.h"
 #include "lockstep/coordinator/outbox.h"
 #include "lockstep/coordinator/tick_barrier.h"
-#include "lockstep/map/map.h"
-#include "lockstep/map/scene.h"
 #include "lockstep/runtime/actor_list.h"
 #include "lockstep/runtime/command_builders.h"
 #include "lockstep/runtime/error.h"
@@ -26,7 +21,9 @@
 #include "lockstep/runtime/log.h"
 #include "lockstep/runtime/messages.h"
 #include "lockstep/runtime/tick_log.h"
+#include "map_source.h"
 #include "playback.h"
+#include "weather_defaults.h"
 
 namespace lockstep {
 
@@ -38,67 +35,6 @@ constexpr auto kHeartbeatTimeout = std::chrono::milliseconds(600);
 // A process on this host that still runs but was not heard (its heartbeat thread starved
 // on an overloaded machine) gets this long before it counts as hung.
 constexpr auto kStarvedTimeout = std::chrono::seconds(5);
-
-namespace {
-
-
-std::string ReadFile(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw lockstep::InputError("cannot read map file '" + path + "'");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
-
-// A map as the coordinator publishes it, checked by parsing it once.
-struct MapContent {
-  std::string name;
-  std::string opendrive;
-  std::string scene;
-  size_t traffic_lights = 0;  // they become actors 1..n of every run, in signal order
-};
-
-// Parses OpenDRIVE and scene; a malformed map throws InputError naming element and line.
-MapContent ParseMap(std::string name, std::string opendrive, std::string scene) {
-  MapContent m{std::move(name), std::move(opendrive), std::move(scene), 0};
-  try {
-    const map::Map parsed = map::Map::FromString(m.opendrive, m.name + ".xodr");
-    if (!m.scene.empty()) map::SceneFromYaml(m.scene, m.name + ".scene.yaml");
-    m.traffic_lights = parsed.TrafficLights().size();
-  } catch (const std::exception& e) {
-    throw lockstep::InputError(std::string("map '") + m.name + "': " + e.what());
-  }
-  return m;
-}
-
-// `path` to an .xodr file; its scene is <stem>.scene.yaml beside it, if present.
-MapContent ReadMap(const std::string& path) {
-  std::filesystem::path p(path);
-  std::filesystem::path scene = p.parent_path() / (p.stem().string() + ".scene.yaml");
-  return ParseMap(p.stem().string(), ReadFile(path), std::filesystem::exists(scene) ? ReadFile(scene.string()) : std::string());
-}
-
-msg::WeatherParameters DefaultWeather() {
-  // CARLA's ClearNoon.
-  msg::WeatherParameters w;
-  w.cloudiness(5);
-  w.precipitation(0);
-  w.precipitation_deposits(0);
-  w.wind_intensity(10);
-  w.sun_azimuth_angle(-1);
-  w.sun_altitude_angle(45);
-  w.fog_density(2);
-  w.fog_distance(0.75f);
-  w.fog_falloff(0.1f);
-  w.wetness(0);
-  w.scattering_intensity(1);
-  w.mie_scattering_scale(0.03f);
-  w.rayleigh_scattering_scale(0.0331f);
-  w.dust_storm(0);
-  return w;
-}
-
-}  // namespace
 
 struct Coordinator::Impl {
   Impl(Bus& b, LaunchConfig c) : bus(b), config(std::move(c)) {
@@ -361,7 +297,7 @@ struct Coordinator::Impl {
     msg::WorldInfo w;
     w.run(run);
     w.map_name(map_name);
-    w.map_hash(Fnv1a64().Add(std::string_view(map_opendrive)).Add(std::string_view(map_scene)).value());
+    w.map_hash(MapHash());
     w.settings(settings);
     w.weather(weather);
     w.seed(seed);
@@ -377,7 +313,7 @@ struct Coordinator::Impl {
     m.name(map_name);
     m.opendrive(map_opendrive);
     m.scene(map_scene);
-    m.content_hash(Fnv1a64().Add(std::string_view(map_opendrive)).Add(std::string_view(map_scene)).value());
+    m.content_hash(MapHash());
     Post(map_writer, m);
   }
 
@@ -533,18 +469,9 @@ struct Coordinator::Impl {
       // A map must load and parse before the command is accepted.
       std::optional<MapContent> new_map;
       if (kind == msg::CommandKind::CMD_LOAD_MAP) {
-        const auto& lm = c.body().load_map();
         std::string why;
         try {
-          if (!lm.opendrive().empty()) {
-            new_map = ParseMap(lm.name().to_string().empty() ? "inline" : lm.name().to_string(), lm.opendrive(), lm.scene());
-          } else if (lm.name().to_string() != map_name) {
-            if (!std::filesystem::exists(lm.name().to_string())) {
-              why = "unknown map '" + lm.name().to_string() + "': give a path to an .xodr file or inline OpenDRIVE";
-            } else {
-              new_map = ReadMap(lm.name().to_string());
-            }
-          }
+          new_map = MapToLoad(c.body().load_map(), map_name);
         } catch (const std::exception& e) {
           why = e.what();
         }

@@ -63,5 +63,23 @@ TEST(LockstepUp, AnUnknownHostIsRefusedBeforeAnythingStarts) {
   EXPECT_EQ(up.Output().find("starting"), std::string::npos) << up.Output();
 }
 
+// `lockstep up --ros2` (CARLA's server --ros2): the launcher and its children see the flag,
+// so the coordinator requires the ros2_bridge the launcher starts, and it steps every frame.
+TEST(LockstepUp, Ros2FlagAddsTheBridgeToTheRun) {
+  const std::string config = WriteTempFile("ros2flag.yaml", R"(name: flag
+participant_profile: lockstep.participant.loopback
+recorder: false
+ticks: 20
+services:
+  - {name: here, kind: noop}
+)");
+  Process up({Bin("lockstep"), "up", config, "--domain", std::to_string(TestDomain()), "--ros2"});
+  const auto code = up.Wait(60s);
+  ASSERT_TRUE(code) << "lockstep up did not finish:\n" << up.Output();
+  EXPECT_EQ(*code, 0) << up.Output();
+  EXPECT_NE(up.Output().find("coordinator + 2 service(s)"), std::string::npos) << up.Output();
+  EXPECT_NE(up.Output().find("ros2_bridge | info: stopping after frame 20"), std::string::npos) << up.Output();
+}
+
 }  // namespace
 }  // namespace lockstep::testing

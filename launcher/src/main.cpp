@@ -345,6 +345,7 @@ int main(int argc, char** argv) {
   auto* bench = app.add_subcommand("bench", "driving benchmarks and CARLA-Air workloads: lockstep bench corl2017 --agent "
                                             "autopilot --episodes N (= lockstep python -m lockstep.benchmarks ...)");
   bench->prefix_command();
+  bench->set_help_flag();  // --help goes on to the benchmarks' own help
 
   CLI11_PARSE(app, argc, argv);
   lockstep::InitLogging("lockstep");

@@ -312,6 +312,8 @@ def test_lockstep_bench_runs_the_benchmarks_package():
     exe = os.path.join(BIN, 'lockstep')
     r = subprocess.run([exe, 'bench', 'corl2017', '--episodes', '0'], capture_output=True, text=True, timeout=60)
     assert r.returncode == 2 and 'lockstep bench: error: --episodes: 1 to 25' in r.stderr, r
+    r = subprocess.run([exe, 'bench', '--help'], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0 and r.stdout.startswith('usage: lockstep bench') and 'corl2017' in r.stdout, r
     r = subprocess.run([exe, 'bench', 'vln', '--help'], capture_output=True, text=True, timeout=60)
     assert r.returncode == 0 and '--routes' in r.stdout and 'vision-language' in r.stdout, r
 

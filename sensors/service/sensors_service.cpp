@@ -134,9 +134,10 @@ SensorsService::SensorsService(Bus& bus, std::string name, SensorsOptions option
       v2x_writer_(bus, topics::kV2X),
       event_writer_(bus, topics::kEvent),
       declarations_(bus),
-      ground_(bus, topics::kGroundState, 16),
-      air_(bus, topics::kAirState, 16),
-      events_(bus),
+      // The inputs of the frames the state topics keep: a replacement replays from them.
+      ground_(bus, topics::kGroundState, static_cast<size_t>(QosHistoryDepth(QosKind::kState))),
+      air_(bus, topics::kAirState, static_cast<size_t>(QosHistoryDepth(QosKind::kState))),
+      events_(bus, static_cast<size_t>(QosHistoryDepth(QosKind::kState))),
       map_reader_(bus, topics::kMap, [this](const msg::MapData& m, const SampleInfo&) {
         {
           std::lock_guard<std::mutex> lock(map_mu_);
@@ -232,6 +233,53 @@ void SensorsService::BeginRun(const msg::WorldInfo& world) {
                air_in_run_ ? " AirState" : "");
 }
 
+namespace {
+constexpr uint32_t kSnapshotVersion = 1;
+}
+
+std::vector<uint8_t> SensorsService::SaveState() const {
+  if (!world_) return {};
+  s::StateOut out;
+  out.Put(kSnapshotVersion);
+  out.Put(weather_.precipitation);
+  out.Put(weather_.fog_density);
+  out.Put(static_cast<uint64_t>(props_.size()));
+  for (const auto& [id, p] : props_) {
+    out.Put(p.id);
+    out.Put(p.parent);
+    out.Put(p.transform);
+    out.Put(p.half_extents);
+    out.Put(p.tag);
+  }
+  world_->Save(out);
+  return std::move(out.bytes());
+}
+
+void SensorsService::RestoreState(const std::vector<uint8_t>& state) {
+  if (!world_) throw InputError("sensors: a snapshot before the run began");
+  s::StateIn in(state);
+  uint32_t version = 0;
+  in.Get(version);
+  if (version != kSnapshotVersion) throw InputError("sensors: snapshot version " + std::to_string(version) + " is not this build's");
+  in.Get(weather_.precipitation);
+  in.Get(weather_.fog_density);
+  uint64_t n = 0;
+  in.Get(n);
+  props_.clear();
+  for (uint64_t i = 0; i < n; ++i) {
+    s::CustomProp p;
+    in.Get(p.id);
+    in.Get(p.parent);
+    in.Get(p.transform);
+    in.Get(p.half_extents);
+    in.Get(p.tag);
+    props_[p.id] = p;
+  }
+  world_->Restore(in);
+  world_->set_weather(weather_);
+  if (!in.done()) throw InputError("sensors: snapshot has trailing bytes");
+}
+
 void SensorsService::Fail(const msg::FrameStamp& stamp, uint32_t actor, const std::string& why) {
   msg::SimEvent e;
   e.stamp(stamp);
@@ -315,8 +363,12 @@ s::WorldFrame SensorsService::Gather(const msg::Tick& tick, uint64_t frame, s::F
   f.frame = frame;
   f.sim_time = tick.sim_time() - static_cast<double>(tick.frame() - frame) * tick.dt();
   const auto timeout = std::chrono::milliseconds(static_cast<int64_t>(options_.input_timeout_s * 1000));
+  // A producer being replaced holds the wait (AwaitInput): no cascade of failures.
+  auto await = [&](auto& buffer) {
+    return AwaitInput([&](std::chrono::milliseconds slice) { return buffer.WaitFor(tick.run(), frame, slice); }, timeout);
+  };
   if (ground_in_run_) {
-    auto g = ground_.WaitFor(tick.run(), frame, timeout);
+    auto g = await(ground_);
     if (!g) throw InputError("sensors: no GroundState of frame " + std::to_string(frame) + " within the input timeout");
     f.sim_time = g->stamp().sim_time();
     s::AppendActors(*g, &f.actors);
@@ -325,7 +377,7 @@ s::WorldFrame SensorsService::Gather(const msg::Tick& tick, uint64_t frame, s::F
     }
   }
   if (air_in_run_) {
-    auto air = air_.WaitFor(tick.run(), frame, timeout);
+    auto air = await(air_);
     if (!air) throw InputError("sensors: no AirState of frame " + std::to_string(frame) + " within the input timeout");
     f.sim_time = air->stamp().sim_time();
     s::AppendActors(*air, &f.actors);
@@ -337,7 +389,8 @@ s::WorldFrame SensorsService::Gather(const msg::Tick& tick, uint64_t frame, s::F
   s::AppendProps(props, &f.actors);
   std::sort(f.actors.begin(), f.actors.end(), [](const s::Actor& a, const s::Actor& b) { return a.id < b.id; });
   if (world_->HasEventSensors() && !event_publishers_.empty()) {
-    auto batches = events_.WaitFor(tick.run(), frame, event_publishers_, timeout);
+    auto batches = AwaitInput(
+        [&](std::chrono::milliseconds slice) { return events_.WaitFor(tick.run(), frame, event_publishers_, slice); }, timeout);
     if (!batches) throw InputError("sensors: no PhysicsEvents of frame " + std::to_string(frame) + " from every physics service within the input timeout");
     for (const auto& b : *batches) {
       for (const auto& c : b.collisions()) {
@@ -364,14 +417,14 @@ void SensorsService::Step(const msg::Tick& tick) {
   tick_stamp.frame(tick.frame());
   tick_stamp.sim_time(tick.sim_time());
   for (const auto& c : tick.commands()) Apply(c, tick_stamp);
-  // A replacement cannot rebuild past samples (their physics inputs are gone): it keeps
-  // the sensor list and samples from the frame it takes over.
-  if (replaying()) return;
   const uint64_t frame = PerceptionFrame(mode_, tick.frame());
   if (frame < 1 || world_->size() == 0) return;
   s::FrameEvents events;
   const s::WorldFrame f = Gather(tick, frame, &events);
+  // A replacement replays the frames since its snapshot with the inputs the state topics
+  // kept (their noise streams and schedules advance as they did), publishing nothing.
   const s::StepOutput out = world_->Step(f, tick.dt(), events);
+  if (replaying()) return;
   msg::FrameStamp stamp;
   stamp.run(tick.run());
   stamp.frame(frame);

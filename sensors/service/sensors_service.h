@@ -52,6 +52,10 @@ class SensorsService final : public ServiceCore {
   std::vector<msg::BlueprintDeclaration> Blueprints() const override;
   std::string CheckSpawn(const msg::SpawnActor& spawn) const override;
   uint64_t StateHash() const override { return world_ ? world_->StateHash() : 0; }
+  // The sensors, their noise streams and schedules, custom props and weather: a replacement
+  // restores them, then replays the frames after with the kept inputs.
+  std::vector<uint8_t> SaveState() const override;
+  void RestoreState(const std::vector<uint8_t>& state) override;
 
   const sensors::SensorWorld* world() const { return world_.get(); }
   // True if this service simulates `spawn` (its owner, or no owner named and ours).

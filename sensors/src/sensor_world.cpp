@@ -20,6 +20,20 @@ struct V2XRadio {
   V2XRadio(const Attributes& a, bool custom, uint64_t seed) : radio(a), rng(seed) {
     if (!custom) cam.emplace(a);
   }
+  void Save(StateOut& out) const {
+    rng.Save(out);
+    out.Put(pending.has_value());
+    if (pending) out.Put(*pending);
+    if (cam) cam->Save(out);
+  }
+  void Load(StateIn& in) {
+    rng.Load(in);
+    bool has = false;
+    in.Get(has);
+    pending.reset();
+    if (has) in.Get(pending.emplace());
+    if (cam) cam->Load(in);
+  }
   PathLoss radio;
   std::optional<CaService> cam;
   std::optional<std::string> pending;
@@ -93,7 +107,163 @@ struct SensorWorld::Sensor {
     if (tick > 0) next = static_cast<uint64_t>(std::floor((t - t0) / tick + 1e-9)) + 1;
     return true;
   }
+
+  void Save(StateOut& out) const {
+    out.Put(started);
+    out.Put(t0);
+    out.Put(next);
+    out.Put(last);
+    out.Put(placed);
+    out.Put(last_pose);
+    std::visit(
+        [&](const auto& m) {
+          using M = std::decay_t<decltype(m)>;
+          if constexpr (!std::is_same_v<M, std::monostate> && !std::is_same_v<M, ObstacleDetector>) m.Save(out);
+        },
+        model);
+  }
+  void Load(StateIn& in) {
+    in.Get(started);
+    in.Get(t0);
+    in.Get(next);
+    in.Get(last);
+    in.Get(placed);
+    in.Get(last_pose);
+    std::visit(
+        [&](auto& m) {
+          using M = std::decay_t<decltype(m)>;
+          if constexpr (!std::is_same_v<M, std::monostate> && !std::is_same_v<M, ObstacleDetector>) m.Load(in);
+        },
+        model);
+  }
 };
+
+void SensorWorld::Save(StateOut& out) const {
+  out.Put(weather_.precipitation);
+  out.Put(weather_.fog_density);
+  out.Put(static_cast<uint64_t>(sensors_.size()));
+  for (const auto& [id, s] : sensors_) {
+    // The spawn as it stands (a detached sensor keeps its last world pose), then its state.
+    out.Put(s->spawn.id);
+    out.Put(s->spawn.blueprint);
+    out.Put(s->spawn.attributes);
+    out.Put(s->spawn.parent);
+    out.Put(s->spawn.transform);
+    s->Save(out);
+  }
+}
+
+void SensorWorld::Restore(StateIn& in) {
+  in.Get(weather_.precipitation);
+  in.Get(weather_.fog_density);
+  uint64_t n = 0;
+  in.Get(n);
+  sensors_.clear();
+  for (uint64_t i = 0; i < n; ++i) {
+    SensorSpawn spawn;
+    in.Get(spawn.id);
+    in.Get(spawn.blueprint);
+    in.Get(spawn.attributes);
+    in.Get(spawn.parent);
+    in.Get(spawn.transform);
+    if (std::string why = Add(spawn); !why.empty()) throw std::runtime_error("sensor snapshot: sensor " + std::to_string(spawn.id) + ": " + why);
+    sensors_.at(spawn.id)->Load(in);
+  }
+}
+
+// ---- snapshots: what each model changes from step to step ----
+void Lidar::Save(StateOut& out) const {
+  out.Put(angle_);
+  rng_.Save(out);
+}
+void Lidar::Load(StateIn& in) {
+  in.Get(angle_);
+  rng_.Load(in);
+}
+void Radar::Save(StateOut& out) const {
+  rng_.Save(out);
+  out.Put(has_prev_);
+  out.Put(prev_position_);
+}
+void Radar::Load(StateIn& in) {
+  rng_.Load(in);
+  in.Get(has_prev_);
+  in.Get(prev_position_);
+}
+void Imu::Save(StateOut& out) const {
+  out.Put(gyro_walk_);
+  out.Put(accel_walk_);
+  out.Put(started_);
+  out.Put(prev_[0]);
+  out.Put(prev_[1]);
+  out.Put(prev_dt_);
+  rng_.Save(out);
+}
+void Imu::Load(StateIn& in) {
+  in.Get(gyro_walk_);
+  in.Get(accel_walk_);
+  in.Get(started_);
+  in.Get(prev_[0]);
+  in.Get(prev_[1]);
+  in.Get(prev_dt_);
+  rng_.Load(in);
+}
+void Gnss::Save(StateOut& out) const {
+  out.Put(age_);
+  out.Put(started_);
+  rng_.Save(out);
+}
+void Gnss::Load(StateIn& in) {
+  in.Get(age_);
+  in.Get(started_);
+  rng_.Load(in);
+}
+void Barometer::Save(StateOut& out) const {
+  out.Put(factor_);
+  rng_.Save(out);
+}
+void Barometer::Load(StateIn& in) {
+  in.Get(factor_);
+  rng_.Load(in);
+}
+void Magnetometer::Save(StateOut& out) const { rng_.Save(out); }
+void Magnetometer::Load(StateIn& in) { rng_.Load(in); }
+void DistanceSensor::Save(StateOut& out) const { rng_.Save(out); }
+void DistanceSensor::Load(StateIn& in) { rng_.Load(in); }
+void CaService::Save(StateOut& out) const {
+  out.Put(started_);
+  out.Put(elapsed_);
+  out.Put(last_cam_);
+  out.Put(last_low_cam_);
+  out.Put(low_dynamics_counter_);
+  out.Put(position_);
+  out.Put(heading_);
+  out.Put(speed_);
+  out.Put(last_position_);
+  out.Put(last_heading_);
+  out.Put(last_speed_);
+  out.Put(accel_started_);
+  out.Put(prev_location_[0]);
+  out.Put(prev_location_[1]);
+  out.Put(prev_dt_);
+}
+void CaService::Load(StateIn& in) {
+  in.Get(started_);
+  in.Get(elapsed_);
+  in.Get(last_cam_);
+  in.Get(last_low_cam_);
+  in.Get(low_dynamics_counter_);
+  in.Get(position_);
+  in.Get(heading_);
+  in.Get(speed_);
+  in.Get(last_position_);
+  in.Get(last_heading_);
+  in.Get(last_speed_);
+  in.Get(accel_started_);
+  in.Get(prev_location_[0]);
+  in.Get(prev_location_[1]);
+  in.Get(prev_dt_);
+}
 
 std::string CheckSensorSpawn(const SensorSpawn& spawn) {
   const SensorBlueprint* bp = FindSensorBlueprint(spawn.blueprint);

@@ -76,6 +76,9 @@ class Lidar {
   PointCloudSample Scan(const RayScene& scene, const Pose& pose, double dt, const Weather& weather);
   double horizontal_angle() const { return angle_; }  // deg
   uint64_t Fingerprint() const;
+  // What changes from step to step (a snapshot for a replacement process).
+  void Save(StateOut& out) const;
+  void Load(StateIn& in);
 
  private:
   int channels_;
@@ -97,6 +100,8 @@ class Radar {
   Radar(const Attributes& a, uint64_t seed);
   std::vector<RadarDetection> Scan(const RayScene& scene, const WorldFrame& world, const Pose& pose, double dt);
   uint64_t Fingerprint() const { return rng_.Fingerprint(); }
+  void Save(StateOut& out) const;
+  void Load(StateIn& in);
 
  private:
   double hfov_, vfov_, range_, pps_;
@@ -111,6 +116,8 @@ class Imu {
   // velocity: the sensor's world velocity (for the first sample's history only).
   ImuSample Sample(const Pose& pose, const Vec3& velocity, const Vec3& angular_velocity_world, double dt);
   uint64_t Fingerprint() const { return rng_.Fingerprint(); }
+  void Save(StateOut& out) const;
+  void Load(StateIn& in);
 
  private:
   Vec3 accel_stddev_, gyro_stddev_, gyro_bias_;
@@ -127,6 +134,8 @@ class Gnss {
   Gnss(const Attributes& a, uint64_t seed);
   GnssSample Sample(const GeoReference& ref, const Pose& pose, double dt);
   uint64_t Fingerprint() const { return rng_.Fingerprint(); }
+  void Save(StateOut& out) const;
+  void Load(StateIn& in);
 
  private:
   double lat_bias_, lat_sd_, lon_bias_, lon_sd_, alt_bias_, alt_sd_;
@@ -140,6 +149,8 @@ class Barometer {
   Barometer(const Attributes& a, uint64_t seed);
   BarometerSample Sample(const GeoReference& ref, const Pose& pose, double dt);
   uint64_t Fingerprint() const { return rng_.Fingerprint(); }
+  void Save(StateOut& out) const;
+  void Load(StateIn& in);
 
  private:
   double qnh_, noise_, factor_sigma_, factor_tau_;
@@ -152,6 +163,8 @@ class Magnetometer {
   Magnetometer(const Attributes& a, uint64_t seed);
   Vec3 Sample(const GeoReference& ref, const Pose& pose);  // gauss, sensor frame
   uint64_t Fingerprint() const { return rng_.Fingerprint(); }
+  void Save(StateOut& out) const;
+  void Load(StateIn& in);
 
  private:
   double noise_, bias_, scale_;
@@ -163,6 +176,8 @@ class DistanceSensor {
   DistanceSensor(const Attributes& a, uint64_t seed);
   DistanceSample Sample(const RayScene& scene, const Pose& pose, uint32_t parent);
   uint64_t Fingerprint() const { return rng_.Fingerprint(); }
+  void Save(StateOut& out) const;
+  void Load(StateIn& in);
 
  private:
   double min_, max_, noise_;

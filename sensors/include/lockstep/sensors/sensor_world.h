@@ -92,6 +92,11 @@ class SensorWorld {
   StepOutput Step(const WorldFrame& frame, double dt, const FrameEvents& events = {});
 
   uint64_t StateHash() const;
+  // Everything a later step depends on besides the run seed, the geo reference and the
+  // static scene (BeginRun's): weather, the sensors with their spawns and model states.
+  // Restore replaces the sensors of this world with the saved ones.
+  void Save(StateOut& out) const;
+  void Restore(StateIn& in);
 
  private:
   struct Sensor;

@@ -3,7 +3,11 @@
 // stream. World frame ENU (x east, y north, z up), metres; bodies and sensors FLU
 // (x forward, y left, z up). No DDS here.
 #include <cstdint>
+#include <cstring>
+#include <map>
+#include <stdexcept>
 #include <string>
+#include <type_traits>
 #include <vector>
 
 #include <Eigen/Core>
@@ -98,6 +102,94 @@ struct Weather {
   double fog_density = 0;
 };
 
+// A snapshot of sensor state (a replacement process restores it): values in order, as
+// their bytes (one machine's representation: snapshots stay within one build).
+class StateOut {
+ public:
+  template <class T>
+  void Put(const T& v) {
+    static_assert(std::is_trivially_copyable_v<T>, "Put: a plain value");
+    const auto* p = reinterpret_cast<const uint8_t*>(&v);
+    bytes_.insert(bytes_.end(), p, p + sizeof v);
+  }
+  void Put(const Vec3& v) {
+    for (int i = 0; i < 3; ++i) Put(v[i]);
+  }
+  void Put(const Quat& q) {
+    for (double c : {q.w(), q.x(), q.y(), q.z()}) Put(c);
+  }
+  void Put(const Pose& p) {
+    Put(p.position);
+    Put(p.orientation);
+  }
+  void Put(const std::string& s) {
+    Put(static_cast<uint64_t>(s.size()));
+    bytes_.insert(bytes_.end(), s.begin(), s.end());
+  }
+  void Put(const std::map<std::string, std::string>& m) {
+    Put(static_cast<uint64_t>(m.size()));
+    for (const auto& [k, v] : m) {
+      Put(k);
+      Put(v);
+    }
+  }
+  std::vector<uint8_t>& bytes() { return bytes_; }
+
+ private:
+  std::vector<uint8_t> bytes_;
+};
+
+class StateIn {
+ public:
+  explicit StateIn(const std::vector<uint8_t>& bytes, size_t at = 0) : bytes_(bytes), at_(at) {}
+  template <class T>
+  void Get(T& v) {
+    static_assert(std::is_trivially_copyable_v<T>, "Get: a plain value");
+    Need(sizeof v);
+    std::memcpy(&v, bytes_.data() + at_, sizeof v);
+    at_ += sizeof v;
+  }
+  void Get(Vec3& v) {
+    for (int i = 0; i < 3; ++i) Get(v[i]);
+  }
+  void Get(Quat& q) {
+    double w = 0, x = 0, y = 0, z = 0;
+    Get(w), Get(x), Get(y), Get(z);
+    q = Quat(w, x, y, z);
+  }
+  void Get(Pose& p) {
+    Get(p.position);
+    Get(p.orientation);
+  }
+  void Get(std::string& s) {
+    uint64_t n = 0;
+    Get(n);
+    Need(n);
+    s.assign(reinterpret_cast<const char*>(bytes_.data() + at_), n);
+    at_ += n;
+  }
+  void Get(std::map<std::string, std::string>& m) {
+    uint64_t n = 0;
+    Get(n);
+    m.clear();
+    for (uint64_t i = 0; i < n; ++i) {
+      std::string k, v;
+      Get(k);
+      Get(v);
+      m.emplace(std::move(k), std::move(v));
+    }
+  }
+  size_t at() const { return at_; }
+  bool done() const { return at_ == bytes_.size(); }
+
+ private:
+  void Need(uint64_t n) const {
+    if (n > bytes_.size() - at_) throw std::runtime_error("sensor snapshot: truncated");
+  }
+  const std::vector<uint8_t>& bytes_;
+  size_t at_;
+};
+
 // Deterministic random stream (splitmix64 seeding, xoshiro256**), identical on every
 // platform: std::normal_distribution is not specified bit for bit, this is.
 class Rng {
@@ -108,6 +200,16 @@ class Rng {
   double Uniform(double lo, double hi) { return lo + (hi - lo) * Uniform(); }
   double Normal(double mean = 0, double stddev = 1);  // Box-Muller, both halves used
   uint64_t Fingerprint() const;              // for state hashes
+  void Save(StateOut& out) const {
+    for (uint64_t v : s_) out.Put(v);
+    out.Put(has_spare_);
+    out.Put(spare_);
+  }
+  void Load(StateIn& in) {
+    for (uint64_t& v : s_) in.Get(v);
+    in.Get(has_spare_);
+    in.Get(spare_);
+  }
 
  private:
   uint64_t s_[4];

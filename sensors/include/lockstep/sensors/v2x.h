@@ -99,6 +99,9 @@ class CaService {
   // changed since the last CAM, and at least gen_cam_min since it; else every T_GenCam),
   // with noise from `rng` in CARLA's order.
   std::optional<CamMessage> Trigger(const Actor& owner, double t, double dt, const GeoReference& geo, Rng& rng);
+  // What changes from step to step (a snapshot for a replacement process).
+  void Save(StateOut& out) const;
+  void Load(StateIn& in);
 
  private:
   CamMessage Create(const Actor& owner, double dt, const GeoReference& geo, Rng& rng);

@@ -6,6 +6,8 @@ from .map import Map
 from .world import Client, TrafficManager, World
 
 _NO_SCENE = 'the static scene (Unreal objects) is not on the wire'
+_ROS_ALL = ("the per-sensor ROS switch is not on the wire: `lockstep up --ros2` (CARLA's server --ros2) "
+            "publishes every supported sensor on CARLA's ROS 2 topics (docs/deployment.md, ROS 2)")
 
 add_unsupported(Vehicle, {
     'close_door': 'doors are not simulated',
@@ -21,9 +23,9 @@ add_unsupported(World, {
 add_unsupported(Sensor, {
     'listen_to_gbuffer': 'render publishes no G-buffers',
     'stop_gbuffer': 'render publishes no G-buffers',
-    'enable_for_ros': 'there is no ROS bridge; the DDS topics are the interface (docs/topics.md)',
-    'disable_for_ros': 'there is no ROS bridge',
-    'is_enabled_for_ros': 'there is no ROS bridge',
+    'enable_for_ros': _ROS_ALL,
+    'disable_for_ros': _ROS_ALL,
+    'is_enabled_for_ros': _ROS_ALL,
 })
 add_unsupported(Map, {
     'save_to_disk': 'the .xodr file the run was started with is the map',

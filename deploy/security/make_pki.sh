@@ -28,7 +28,7 @@ while [ $# -gt 0 ]; do
     *) names+=("$1"); shift ;;
   esac
 done
-[ ${#names[@]} -gt 0 ] || names=(coordinator air_sim ground_sim sensors render recorder noop client)
+[ ${#names[@]} -gt 0 ] || names=(coordinator air_sim ground_sim sensors render recorder noop client ros2_bridge)
 for n in "${names[@]}"; do
   [[ "$n" =~ ^[A-Za-z0-9_.-]+$ ]] || { echo "make_pki.sh: '$n' is not a valid identity name (letters, digits, _ . -)" >&2; exit 2; }
 done
@@ -60,6 +60,9 @@ for n in "${names[@]}"; do
       -out "$n.cert.pem" 2>/dev/null
     rm -f "$n.csr"
   fi
+  # The ROS 2 bridge alone may also use ROS 2's topics (rt/..., CARLA's ROS 2 names).
+  topics='<topic>lockstep/*</topic>'
+  [ "$n" != ros2_bridge ] || topics="$topics<topic>rt/*</topic>"
   subject=$(openssl x509 -in "$n.cert.pem" -noout -subject -nameopt RFC2253 | sed 's/^subject=//')
   cat >> permissions.xml <<XML
     <grant name="lockstep.$n">
@@ -67,8 +70,8 @@ for n in "${names[@]}"; do
       <validity><not_before>$not_before</not_before><not_after>$not_after</not_after></validity>
       <allow_rule>
         <domains><id_range><min>0</min><max>232</max></id_range></domains>
-        <publish><topics><topic>lockstep/*</topic></topics></publish>
-        <subscribe><topics><topic>lockstep/*</topic></topics></subscribe>
+        <publish><topics>$topics</topics></publish>
+        <subscribe><topics>$topics</topics></subscribe>
       </allow_rule>
       <default>DENY</default>
     </grant>

@@ -375,7 +375,9 @@ std::vector<ground::ExternalBody> GroundService::Drones(const msg::Tick& tick) {
   std::vector<ground::ExternalBody> bodies;
   if (wait_for_air_ && tick.frame() >= 2 && !replaying()) {
     const auto timeout = std::chrono::milliseconds(static_cast<int64_t>(input_timeout_s_ * 1000));
-    auto air = air_.WaitFor(tick.run(), tick.frame() - 1, timeout);
+    // A drone service being replaced holds the wait (AwaitInput: while another service's failure
+    // stops the run, the timeout does not run out), so its fault does not fail ground_sim too.
+    auto air = AwaitInput([&](std::chrono::milliseconds slice) { return air_.WaitFor(tick.run(), tick.frame() - 1, slice); }, timeout);
     if (!air) {
       throw MissingInput(name_ + ": no AirState of frame " + std::to_string(tick.frame() - 1) + " (from " + drone_sources_.front() +
                        ") within " + std::to_string(input_timeout_s_) + " s; a missing input faults the run");

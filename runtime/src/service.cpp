@@ -237,7 +237,10 @@ struct ServiceRunner::Impl {
           return snapshot && snapshot->run() == run && snapshot->frame() <= newest_usable &&
                  (!log || snapshot->frame() >= log->first_frame());
         };
-        if (log && log->first_frame() > 0) cv.wait_for(lock, std::chrono::seconds(5), [&] { return stop || usable(); });
+        // (Not for a service that keeps no state, hash 0: it has no snapshot to wait for.)
+        if (log && log->first_frame() > 0 && log->last_hash() != 0) {
+          cv.wait_for(lock, std::chrono::seconds(5), [&] { return stop || usable(); });
+        }
         if (usable()) snap = snapshot;
       }
       uint64_t restored = 0;
@@ -251,6 +254,8 @@ struct ServiceRunner::Impl {
         to = restored;  // the open tick's own snapshot: nothing to replay
       } else if (log && log->first_frame() <= restored) {
         restored = Replay(*log, restored, to);
+      } else if (log && log->last_hash() == 0 && core.StateHash() == 0) {
+        spdlog::info("keeps no state: took over at frame {}", to);  // nothing to rebuild
       } else if (log) {
         Diverge("the tick log starts after frame " + std::to_string(log->first_frame()) + " and no snapshot of frame " +
                 std::to_string(log->first_frame()) + " or later is here: joined run " + std::to_string(run.load()) +

@@ -5,10 +5,12 @@
 #include <yaml-cpp/yaml.h>
 
 #include <cinttypes>
+#include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
 
+#include "lockstep/map/buildings.h"
 #include "lockstep/map/error.h"
 
 namespace lockstep::map {
@@ -55,11 +57,24 @@ double Num(const std::string& src, const YAML::Node& n, const char* key, bool re
     if (required) Fail(src, n, std::string("missing key '") + key + "'");
     return fallback;
   }
+  double d = 0;
   try {
-    return v.as<double>();
+    d = v.as<double>();
   } catch (const YAML::Exception&) {
     Fail(src, v, std::string("key '") + key + "' is not a number");
   }
+  if (!std::isfinite(d)) Fail(src, v, std::string("key '") + key + "' is not a finite number");
+  return d;
+}
+
+// An integer key within [lo, hi] (a cast of NaN or 3e9 to int is undefined: the scene fuzzer).
+int Int(const std::string& src, const YAML::Node& n, const char* key, int lo, int hi) {
+  const double d = Num(src, n, key);
+  if (d < lo || d > hi || d != std::floor(d)) {
+    Fail(src, n[key], std::string("key '") + key + "' must be an integer in [" + std::to_string(lo) + ", " +
+                          std::to_string(hi) + "]");
+  }
+  return static_cast<int>(d);
 }
 
 std::string Str(const std::string& src, const YAML::Node& n, const char* key, bool required = true) {
@@ -134,14 +149,14 @@ Scene SceneFromYaml(const std::string& text, const std::string& src) {
   }
   ReadList(src, root, "buildings", [&](const YAML::Node& n) {
     BuildingInstance b;
-    b.design = static_cast<int>(Num(src, n, "design"));
+    b.design = Int(src, n, "design", 0, kBuildingDesignCount - 1);
     b.x = Num(src, n, "x");
     b.y = Num(src, n, "y");
     b.z = Num(src, n, "z", false, 0);
     b.yaw = Num(src, n, "yaw", false, 0);
     b.width = Num(src, n, "width");
     b.depth = Num(src, n, "depth");
-    b.storeys = static_cast<int>(Num(src, n, "storeys"));
+    b.storeys = Int(src, n, "storeys", 1, 200);
     b.storey_height = Num(src, n, "storey_height", false, 3.2);
     if (b.design < 0 || b.width <= 0 || b.depth <= 0 || b.storeys < 1) Fail(src, n, "invalid building");
     s.buildings.push_back(b);

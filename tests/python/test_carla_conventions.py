@@ -496,6 +496,32 @@ def test_a_right_turn_reads_a_positive_yaw_rate(world):
 
 
 @needs_sensors
+def test_a_sensor_attached_to_a_car_is_mounted_from_carlas_vehicle_origin(world):
+    """CARLA's attachment transform is relative to the vehicle's origin (the base of its box):
+    a sensor at z=1.4 looking down is 1.4 m above the road, for the client and the services."""
+    if not has_service('ground_sim'):
+        pytest.skip('ground_sim is not built')
+    lib = world.get_blueprint_library()
+    car = world.try_spawn_actor(lib.filter('vehicle.*')[0], carla.Transform(carla.Location(47.75, -1.75, 0.3)))
+    assert car is not None
+    bp = lib.find('sensor.other.obstacle')
+    bp.set_attribute('distance', '10')
+    bp.set_attribute('hit_radius', '0.05')
+    det = world.spawn_actor(bp, carla.Transform(carla.Location(x=1.5, z=1.4), carla.Rotation(pitch=-90)), attach_to=car)
+    try:
+        for _ in range(20):  # settle on the road
+            world.tick()
+        local = car.get_transform().inverse_transform(det.get_transform().location)
+        assert (local.x, local.y, local.z) == pytest.approx((1.5, 0.0, 1.4), abs=0.02)
+        e = _latest(world, det)
+        assert e.other_actor is not None and e.other_actor.type_id == 'static.road'
+        assert e.distance == pytest.approx(1.4, abs=0.15)  # the car's origin is within 0.25 m of the road
+    finally:
+        det.destroy()
+        car.destroy()
+
+
+@needs_sensors
 def test_an_obstacle_detector_looking_down_sees_carlas_static_road(world):
     bp = world.get_blueprint_library().find('sensor.other.obstacle')
     bp.set_attribute('distance', '10')

@@ -615,16 +615,13 @@ class World:
 
     def _wire_spawn_transform(self, blueprint_id, kind, transform, parent):
         """CARLA's transform of a spawn -> the wire's: a vehicle's origin is the base of its
-        box (the wire carries the box centre), and so is the frame of what is attached to one."""
+        box (the wire carries the box centre). What is attached to a vehicle keeps CARLA's
+        transform as it is: the services mount it on the base of the parent's box, CARLA's
+        vehicle origin (sensors' MountPose, render's rig, Actor._wire_pose)."""
         if kind == 'vehicle':
             d = self._declaration(blueprint_id)
             if d is not None:
                 transform = shift_up(transform, d['half_extents'][2])
-        if parent is not None:
-            dz = parent._base_offset() if hasattr(parent, '_base_offset') else 0.0
-            if dz:
-                loc = transform.location
-                transform = Transform(Location(loc.x, loc.y, loc.z - dz), transform.rotation)
         return transform
 
     def _wrap(self, info):

@@ -21,6 +21,7 @@
 #include <mutex>
 #include <optional>
 
+#include "lockstep/recorder/sensor_selection.h"
 #include "lockstep/runtime/command_builders.h"
 #include "lockstep/runtime/domain_lock.h"
 #include "lockstep/runtime/error.h"
@@ -295,6 +296,10 @@ int main(int argc, char** argv) {
   bool ros2 = false;
   up->add_flag("--ros2", ros2, "also publish the ROS 2 topics of CARLA's native interface (adds the ros2_bridge service; "
                                "as `ros2: true` in the config)");
+  std::string record_sensors;
+  up->add_option("--record-sensors", record_sensors,
+                 "the recorder also logs these sensors' outputs: all, actor ids, role_name=NAME or blueprint "
+                 "patterns (sensor.camera.*), comma-separated (docs/recorder.md)");
 
   auto* serve = app.add_subcommand("serve", "the simulator a CARLA user starts: every built service on a map, "
                                              "free-running at real time, until Ctrl-C");
@@ -307,6 +312,7 @@ int main(int argc, char** argv) {
       ->capture_default_str()
       ->check(CLI::PositiveNumber);
   serve->add_flag("--ros2", ros2, "also publish the ROS 2 topics of CARLA's native interface, as CARLA's server with --ros2");
+  serve->add_option("--record-sensors", record_sensors, "the recorder also logs these sensors' outputs (as lockstep up)");
 
   auto* status = app.add_subcommand("status", "show a running simulation");
   int status_domain = 0;
@@ -354,6 +360,15 @@ int main(int argc, char** argv) {
   // The coordinator and every service read the config: the flag reaches them through the
   // environment, as the default recorder does.
   if (ros2) setenv("LOCKSTEP_ROS2", "1", 1);
+  if (!record_sensors.empty()) {
+    try {
+      lockstep::recorder::SensorSelection::Parse(record_sensors);  // refuse a bad selection before starting anything
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "lockstep: --record-sensors: %s\n", e.what());
+      return 2;
+    }
+    setenv("LOCKSTEP_RECORD_SENSORS", record_sensors.c_str(), 1);
+  }
   try {
     if (*up) return Up(config_file, domain, !no_coordinator);
     if (*serve) return Serve(serve_options);

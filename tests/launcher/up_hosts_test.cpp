@@ -81,5 +81,33 @@ services:
   EXPECT_NE(up.Output().find("ros2_bridge | info: stopping after frame 20"), std::string::npos) << up.Output();
 }
 
+// `lockstep up --record-sensors SPEC` reaches the recorder (the log's header names the
+// selection); a selection that is none of the forms is refused before anything starts.
+TEST(LockstepUp, RecordSensorsReachesTheRecorderAndABadSelectionIsRefused) {
+  const std::string out_dir = std::filesystem::absolute(WriteTempFile("rs.keep", "")).parent_path().string() + "/rs_out";
+  std::filesystem::remove_all(out_dir);
+  const std::string config = WriteTempFile("recsensors.yaml", "name: rs\nparticipant_profile: lockstep.participant.loopback\n"
+                                                              "recorder: false\nticks: 20\noutput_dir: " + out_dir + "\n" + R"(services:
+  - {name: here, kind: noop}
+  - {name: recorder, kind: recorder, perception: true, args: [--record-run]}
+)");
+  Process bad({Bin("lockstep"), "up", config, "--domain", std::to_string(TestDomain()), "--record-sensors", "colour=red"});
+  const auto bad_code = bad.Wait(30s);
+  ASSERT_TRUE(bad_code) << bad.Output();
+  EXPECT_EQ(*bad_code, 2) << bad.Output();
+  EXPECT_NE(bad.Output().find("--record-sensors: sensor selection 'colour=red'"), std::string::npos) << bad.Output();
+  EXPECT_EQ(bad.Output().find("starting"), std::string::npos) << bad.Output();
+
+  Process up({Bin("lockstep"), "up", config, "--domain", std::to_string(TestDomain()), "--record-sensors", "sensor.camera.*"});
+  const auto code = up.Wait(60s);
+  ASSERT_TRUE(code) << "lockstep up did not finish:\n" << up.Output();
+  ASSERT_EQ(*code, 0) << up.Output();
+  const std::string log = out_dir + "/run1/recording.lslog";
+  ASSERT_TRUE(std::filesystem::exists(log)) << up.Output();
+  Process info({Bin("lockstep"), "log", "info", log});
+  ASSERT_TRUE(info.Wait(30s)) << info.Output();
+  EXPECT_NE(info.Output().find("selection 'sensor.camera.*'"), std::string::npos) << info.Output();
+}
+
 }  // namespace
 }  // namespace lockstep::testing

@@ -423,6 +423,16 @@ struct Client::Impl {
       lock.unlock();
       if (options.interrupted && options.interrupted()) throw Interrupted("interrupted while connecting");
     }
+    // The shared, keyed sensor topics are read from now on, not from the first listen():
+    // sensor topics are VOLATILE, and a reader made by listen() right before tick() could
+    // be matched by the sensors service only after it wrote that frame (lost: the tick then
+    // waited sensor_timeout_s and threw SensorLate). Made here, they are discovered with
+    // the command writer the ping below proves. Cameras keep one TRANSIENT_LOCAL topic each.
+    for (SensorType type : {SensorType::kPointCloud, SensorType::kRadar, SensorType::kImu, SensorType::kGnss,
+                            SensorType::kBarometer, SensorType::kMagnetometer, SensorType::kCollision,
+                            SensorType::kLaneInvasion, SensorType::kObstacle, SensorType::kDistance, SensorType::kV2X}) {
+      EnsureSensorReader(type, 0);
+    }
     // Each side discovers the other's endpoints on its own: our reader may see the
     // coordinator's reply writer before that writer sees our reader, and a reply written
     // before then is lost (VOLATILE). A reply proves both directions: ping (CMD_TICK with

@@ -297,6 +297,18 @@ TEST_F(ClientTest, SixSensorsDeliverEveryFrameOnceAndInOrderBeforeTickReturns) {
   }
 }
 
+// The shared sensor topics are VOLATILE: a reader made only by the first listen() could be
+// matched after the service wrote the frame the next tick() waits for (SensorLate under load).
+TEST_F(ClientTest, TheSharedSensorTopicsAreReadFromConnectNotFromTheFirstListen) {
+  Start(true);
+  EXPECT_GE(sensors_->ImuReaders(), 1) << "no client reader on the IMU topic before any listen()";
+  const uint32_t imu = client_->spawn("sensor.other.imu", MakePose(0, 0, 1));
+  client_->listen(imu, [](const SensorSample&) {});
+  EXPECT_EQ(client_->delivered(imu), 0u);
+  const uint64_t k = client_->tick();
+  EXPECT_EQ(client_->delivered(imu), 1u) << "frame " << k;
+}
+
 TEST_F(ClientTest, ALateSensorIsNamedAndItsDataStillArrivesOnce) {
   Start(true, /*skip_frame=*/5, /*sensor_timeout=*/0.5);
   const uint32_t good = client_->spawn("sensor.other.imu", MakePose(0, 0, 1));

@@ -26,6 +26,8 @@ class FakeSensors final : public ServiceCore {
   }
 
   void BeginRun(const msg::WorldInfo&) override { sensors_.clear(); }
+  // Readers of the shared IMU topic (a client reads it from connect, before any listen()).
+  int ImuReaders() const { return imu_.MatchedReaders(); }
 
   void Step(const msg::Tick& tick) override {
     for (const auto& c : tick.commands()) {

@@ -949,8 +949,9 @@ void Client::set_weather(const msg::WeatherParameters& weather) {
   Submit(std::move(b));
 }
 
-uint64_t Client::tick() {
+uint64_t Client::tick(double timeout_s) {
   auto& s = *impl_;
+  const double frame_timeout = timeout_s < 0 ? s.options.tick_timeout_s : timeout_s;
   msg::CommandBody b;
   msg::TickRequest t;
   t.count(1);
@@ -962,17 +963,20 @@ uint64_t Client::tick() {
     std::unique_lock<std::mutex> lock(s.mu);
     s.quiet_reply = seq;
     auto done_for = [&](const msg::CommandReply& x) { return !x.accepted() || s.done >= RunFrame{x.run(), x.frame()}; };
-    const bool replied = s.WaitOn(s.frame_cv, lock, Deadline(s.options.timeout_s), [&] {
+    // The frame's time-out counts from the call, as CARLA's (the reply is part of it).
+    const auto frame_deadline = Deadline(frame_timeout);
+    const double reply_timeout = std::min(s.options.timeout_s, frame_timeout);
+    const bool replied = s.WaitOn(s.frame_cv, lock, std::min(Deadline(s.options.timeout_s), frame_deadline), [&] {
       auto it = s.replies.find(seq);
       return it != s.replies.end() && done_for(it->second);
     }) || s.replies.count(seq) > 0;
     s.quiet_reply = 0;
-    if (!replied) throw ClientError(std::string("tick: no reply from the coordinator within ") + Fmt(s.options.timeout_s) + " s");
+    if (!replied) throw ClientError(std::string("tick: no reply from the coordinator within ") + Fmt(reply_timeout) + " s");
     r = s.replies.at(seq);
     s.replies.erase(seq);
     if (!r.accepted()) throw CommandRejected("tick rejected: " + r.reason().to_string(), r.reason().to_string());
-    if (!s.WaitOn(s.frame_cv, lock, Deadline(s.options.tick_timeout_s), [&] { return done_for(r); })) {
-      throw ClientError("tick(): frame " + std::to_string(r.frame()) + " did not complete within " + Fmt(s.options.tick_timeout_s) +
+    if (!s.WaitOn(s.frame_cv, lock, frame_deadline, [&] { return done_for(r); })) {
+      throw ClientError("tick(): frame " + std::to_string(r.frame()) + " did not complete within " + Fmt(frame_timeout) +
                         " s" + s.FaultReason());
     }
   }

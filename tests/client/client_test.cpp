@@ -48,6 +48,7 @@ class ClientTest : public ::testing::Test {
     ASSERT_TRUE(client_->wait_ready(30)) << "services did not join";
   }
   void TearDown() override {
+    if (sensors_) sensors_->Hold(false);
     client_.reset();
     stop_ = true;
     for (auto& t : threads_) t.join();
@@ -307,6 +308,22 @@ TEST_F(ClientTest, TheSharedSensorTopicsAreReadFromConnectNotFromTheFirstListen)
   EXPECT_EQ(client_->delivered(imu), 0u);
   const uint64_t k = client_->tick();
   EXPECT_EQ(client_->delivered(imu), 1u) << "frame " << k;
+}
+
+// CARLA's world.tick(seconds): the frame's wait is bounded by the call's own time-out.
+TEST_F(ClientTest, TickGivesUpAfterItsOwnTimeoutAndTheNextTickGoesOn) {
+  Start(true);
+  client_->tick();
+  sensors_->Hold(true);
+  try {
+    client_->tick(0.25);
+    ADD_FAILURE() << "tick(0.25) returned with a service holding the frame";
+  } catch (const ClientError& e) {
+    EXPECT_NE(std::string(e.what()).find("did not complete within 0.25 s"), std::string::npos) << e.what();
+  }
+  sensors_->Hold(false);
+  const uint64_t k = client_->tick();
+  EXPECT_GT(k, 0u);
 }
 
 TEST_F(ClientTest, ALateSensorIsNamedAndItsDataStillArrivesOnce) {

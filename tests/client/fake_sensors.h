@@ -3,7 +3,9 @@
 // (blueprint declarations, like the real services) and, every tick, publishes one sample
 // per sensor it owns stamped with the tick's frame, before its ack. A sensor spawned with
 // role_name "late" skips frame `skip_frame`, so tests can see the API name a late sensor.
+#include <condition_variable>
 #include <map>
+#include <mutex>
 #include <string>
 
 #include "lockstep/runtime/blueprint_builder.h"
@@ -28,8 +30,20 @@ class FakeSensors final : public ServiceCore {
   void BeginRun(const msg::WorldInfo&) override { sensors_.clear(); }
   // Readers of the shared IMU topic (a client reads it from connect, before any listen()).
   int ImuReaders() const { return imu_.MatchedReaders(); }
+  // While held, Step does not return: the frame stays incomplete (a stalled service).
+  void Hold(bool hold) {
+    {
+      std::lock_guard<std::mutex> lock(hold_mu_);
+      held_ = hold;
+    }
+    hold_cv_.notify_all();
+  }
 
   void Step(const msg::Tick& tick) override {
+    {
+      std::unique_lock<std::mutex> lock(hold_mu_);
+      hold_cv_.wait(lock, [&] { return !held_; });
+    }
     for (const auto& c : tick.commands()) {
       const auto& b = c.body();
       if (b._d() == msg::CommandKind::CMD_SPAWN_ACTOR) {
@@ -94,6 +108,9 @@ class FakeSensors final : public ServiceCore {
   std::map<uint32_t, Sensor> sensors_;
   Writer<msg::Imu> imu_;
   std::map<uint32_t, Writer<msg::Image>> images_;
+  std::mutex hold_mu_;
+  std::condition_variable hold_cv_;
+  bool held_ = false;
 };
 
 }  // namespace lockstep::testing

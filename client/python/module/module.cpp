@@ -530,7 +530,7 @@ PYBIND11_MODULE(_lockstep, m) {
              python::ReleaseGil release;
              c.set_weather(w);
            })
-      .def("tick", &Client::tick, py::call_guard<python::ReleaseGil>())
+      .def("tick", &Client::tick, py::arg("timeout_s") = -1.0, py::call_guard<python::ReleaseGil>())
       .def("wait_for_tick", &Client::wait_for_tick, py::arg("timeout") = -1.0, py::call_guard<python::ReleaseGil>())
       .def("reset", &Client::reset, py::arg("seed") = 0, py::call_guard<python::ReleaseGil>())
       .def("load_map", &Client::load_map, py::arg("name"), py::arg("opendrive") = "", py::arg("scene") = "",

@@ -152,8 +152,9 @@ class Client {
   void set_weather(const msg::WeatherParameters& weather);
   // Synchronous mode: runs one tick and returns its frame once it is complete, its
   // ground / air state has arrived and every listened sensor delivered its data for it
-  // (or throws SensorLate naming the late ones).
-  uint64_t tick();
+  // (or throws SensorLate naming the late ones). timeout_s bounds the wait for the frame to
+  // complete (CARLA's world.tick(seconds)); negative: ClientOptions::tick_timeout_s.
+  uint64_t tick(double timeout_s = -1);
   // Any mode: waits for the next completed frame after the current one; returns it.
   uint64_t wait_for_tick(double timeout_s = -1);
   // A new run with no actors (seed 0 = keep); returns the new run id.

@@ -539,7 +539,7 @@ class World:
         if self._constant_velocity:
             self._apply_constant_velocities()
         try:
-            return self._client.tick()
+            return self._client.tick(seconds)
         except lockstep.CommandRejected as e:
             if 'synchronous' not in str(getattr(e, 'reason', e)):
                 raise

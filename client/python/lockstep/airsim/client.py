@@ -336,8 +336,9 @@ class _Shared:
         self.weather_enabled = False
         self.time_of_day = None
         self.spawned_objects = {}  # name -> actor id (simSpawnObject)
-        self.car_api = {}          # (run, car actor id) -> API control (CarClient.enableApiControl)
-        self.car_controls = {}     # (run, car actor id) -> the CarControls last set under API control
+        self.car_api = {}          # (run, car actor id) -> API control, where it cannot be the car's (no marker blueprint)
+        self.car_controls = {}     # (run, car actor id) -> (CarControls last set under API control, frame set)
+        self.car_watch = {}        # (run, car actor id) -> [collision sensor, last event, frame of the last reset]
 
     # --- settings and the run ---
     def load_settings(self):
@@ -423,7 +424,7 @@ class _Shared:
         """The player start (world ENU, on the ground): the sidewalk point nearest the map's
         first vehicle spawn point that is 6 m or more from every vehicle spawn point and 3 m
         from every actor, so no car spawned there hits the drone ($LOCKSTEP_DRONE_SPAWN=x,y,z
-        sets it)."""
+        sets it). In SimMode "Car" the map's first vehicle spawn point, on the road."""
         if self.player_start is not None:
             return self.player_start
         env = os.environ.get('LOCKSTEP_DRONE_SPAWN')
@@ -431,6 +432,11 @@ class _Shared:
             v = [float(p) for p in env.split(',')]
             self.player_start = (v[0], v[1], v[2])
             return self.player_start
+        if self.load_settings().sim_mode == 'Car':
+            cs = self.car_start()   # SimMode "Car": AirSim's car starts on the road
+            if cs is not None:
+                self.player_start = cs[:3]
+                return self.player_start
         try:
             m = self.client.map()
             spawns = [tuple(p[:3]) for p in m.spawn_points(2.0)]
@@ -550,6 +556,164 @@ class _Shared:
             return vs[0] if not s.vehicles else None
         return None
 
+    # --- AirSim's cars (CarClient, SimMode "Car") on ground_sim ---
+    def airsim_car_names(self):
+        """The names of AirSim's cars: the settings' cars in SimMode "Car" (AirSim's PhysXCar
+        when it names none), else the PhysXCar a CarClient creates."""
+        s = self.load_settings()
+        if s.sim_mode == 'Car':
+            return [v.name for v in s.all_vehicles() if v.mode == 'Car']
+        return ['PhysXCar']
+
+    def car_setting(self, name):
+        s = self.load_settings()
+        if name in s.vehicles:
+            return s.vehicles[name]
+        if not s.vehicles and s.sim_mode == 'Car' and name == 'PhysXCar':
+            return s.default_vehicle()
+        return None
+
+    def car_start(self):
+        """The map's first vehicle spawn point (x, y, z on the road, yaw rad ENU); None without one."""
+        try:
+            sp = self.client.map().spawn_points(2.0)[0]
+        except (lockstep.ClientError, IndexError):
+            return None
+        return (sp[0], sp[1], sp[2] - 0.5, sp[3])   # road spawn points stand 0.5 m above the road
+
+    def spawn_car(self, name, pose):
+        bps = sorted(d['id'] for d in self.client.blueprints(1.0) if d['id'].startswith('vehicle.'))
+        if not bps:
+            _unsupported('CarClient', 'no ground_sim service is running')
+        return self.client.spawn(bps[0], pose, {'role_name': name})
+
+    def ensure_cars(self):
+        """SimMode "Car": AirSim's cars exist from the start: the settings' AutoCreate cars (or
+        AirSim's PhysXCar) are spawned at their poses (NED from the player start; without a
+        Yaw the player start's heading) the first time a client needs one."""
+        with self.lock:
+            self.begin_run()
+            s = self.load_settings()
+            if s.sim_mode != 'Car':
+                return
+            want = [v for v in s.all_vehicles() if v.mode == 'Car' and v.auto_create]
+            have = {a['attributes'].get('role_name', '') for a in self.client.actors() if a['kind'] == 'vehicle'}
+            missing = [v for v in want if v.name not in have]
+            if not missing:
+                return
+            sx, sy, sz = self.start()
+            cs = self.car_start()
+            yaw_enu = cs[3] if cs else 0.0
+            for v in missing:
+                x, y, z = geo.ned_to_enu_pos((v.x, v.y, v.z), (sx, sy, sz + _CAR_HEIGHT))
+                yaw = v.yaw if v.yaw_given else 90.0 - math.degrees(yaw_enu)
+                q = geo.ned_to_enu_quat(geo.frd_euler_deg_to_quat(v.roll, v.pitch, yaw))
+                self.spawn_car(v.name, (x, y, z) + tuple(q))
+            self.wait_frames(2)
+
+    def airsim_cars(self):
+        """The run's AirSim cars (by name), not the other cars of the world."""
+        names = set(self.airsim_car_names())
+        return [a for a in self.client.actors() if a['kind'] == 'vehicle' and a['attributes'].get('role_name', '') in names]
+
+    def reset_car(self, a):
+        """CarPawnSimApi::reset: the car back at its start, at rest, CarControls() applied and
+        kept (CarPawnApi::resetImplementation), its collision info cleared; API control stays."""
+        from .types import CarControls
+        c = self.client
+        c.submit({'type': 'set_transform', 'actor': a['id'], 'transform': tuple(a['spawn_transform'])})
+        for kind in ('set_target_velocity', 'set_target_angular_velocity'):
+            c.submit({'type': 'actor_physics', 'actor': a['id'], 'kind': kind, 'value': (0.0, 0.0, 0.0)})
+        c.submit(dict(_car_wire_controls(CarControls()), type='vehicle_control', actor=a['id']))
+        key = (self.client.world_info()['run'], a['id'])
+        if key in self.car_controls:
+            self.car_controls[key] = (CarControls(), math.inf)
+        w = self.car_watch.get(key)
+        if w is not None:
+            with self.lock:
+                w[1] = None
+                w[2] = c.frame()   # events of frames before the reset are not this start's
+
+    def watch_car(self, a):
+        """Listens to the car's collision sensor (role_name airsim_collision; spawned on it the
+        first time, when the sensors service declares sensor.other.collision); returns `a`."""
+        key = (self.client.world_info()['run'], a['id'])
+        if key in self.car_watch:
+            return a
+        with self.lock:
+            if key in self.car_watch:
+                return a
+            slot = [None, None, -1]   # sensor id, last event sample, ignore events up to this frame
+            self.car_watch[key] = slot
+            found = [x for x in self.client.actors()
+                     if x['parent'] == a['id'] and x['attributes'].get('role_name') == _COLLISION_SENSOR]
+            if found:
+                slot[0] = found[0]['id']
+            elif 'sensor.other.collision' in {d['id'] for d in self.client.blueprints(1.0)}:
+                slot[0] = self.client.spawn('sensor.other.collision', (0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0),
+                                            {'role_name': _COLLISION_SENSOR}, a['id'])
+            if slot[0] is not None:
+                def on_event(sample, slot=slot):
+                    if sample.frame > slot[2]:
+                        slot[1] = sample
+                self.client.listen(slot[0], on_event)
+        return a
+
+    def car_collision(self, a, st, call):
+        """AirSim's CollisionInfo of the car's last collision since its start or reset."""
+        key = (self.client.world_info()['run'], a['id'])
+        slot = self.car_watch.get(key)
+        if slot is None or slot[0] is None:
+            _unsupported((call or 'CarState.collision') + ' on a car', 'it needs the sensors service (sensor.other.collision on the car)')
+        out = CollisionInfo()
+        ev = slot[1]
+        if ev is None:
+            return out
+        f = ev.fields()
+        n = f['normal_impulse']
+        norm = math.sqrt(sum(x * x for x in n))
+        out.has_collided = True
+        out.normal = _v(geo.enu_to_ned_pos(tuple(x / norm for x in n), (0, 0, 0))) if norm > 0 else Vector3r()
+        pos = _v(geo.enu_to_ned_pos(st['transform'][:3], a['spawn_transform'][:3]))
+        out.position = out.impact_point = pos
+        other = int(f['other_actor'])
+        out.object_id = other if other else -1
+        if other:
+            oa = self.client.actor(other)
+            role = oa['attributes'].get('role_name', '') if oa else ''
+            out.object_name = role or ('%s_%d' % (oa['kind'], other) if oa else '')
+        dt = self.client.world_info()['settings']['fixed_delta_seconds']
+        out.time_stamp = int(round(ev.frame * dt * 1e9))
+        return out
+
+    def car_api_enabled(self, a):
+        """A car's API control: an actor on it named airsim_api_control (any process sees it:
+        AirSim's server holds the flag); per process where no service declares its blueprint."""
+        key = (self.client.world_info()['run'], a['id'])
+        if key in self.car_api:
+            return self.car_api[key]
+        return any(x['parent'] == a['id'] and x['attributes'].get('role_name') == _API_MARKER for x in self.client.actors())
+
+    def set_car_api(self, a, enabled):
+        key = (self.client.world_info()['run'], a['id'])
+        marker_bp = 'sensor.other.collision'
+        if key not in self.car_api and marker_bp not in {d['id'] for d in self.client.blueprints(1.0)}:
+            log.warning('airsim: no service declares %s: the API control of car %d is this process\'s', marker_bp, a['id'])
+            self.car_api[key] = False
+        if key in self.car_api:
+            self.car_api[key] = enabled
+            return
+        markers = [x['id'] for x in self.client.actors()
+                   if x['parent'] == a['id'] and x['attributes'].get('role_name') == _API_MARKER]
+        if enabled and not markers:
+            self.client.spawn(marker_bp, (0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0), {'role_name': _API_MARKER}, a['id'])
+        elif not enabled:
+            for m in markers:
+                try:
+                    self.client.destroy(m)
+                except lockstep.ClientError:
+                    pass
+
     # --- geodesy (the map's geo-reference; settings' OriginGeopoint at the player start) ---
     def _geo_ref(self):
         lat = lon = 0.0
@@ -642,11 +806,37 @@ class VehicleClient:
         self._mc = self._s.mc
         self._s.load_settings()   # a bad settings.json fails here, naming the key, as AirSim fails to start
 
+    # --- the vehicle a call addresses: a drone here, a car in a CarClient ---
+    def _vehicle(self, vehicle_name):
+        """The actor id of the vehicle named `vehicle_name` ('' AirSim's default vehicle)."""
+        return self._s.actor(vehicle_name)
+
+    def _vehicle_pose(self, vehicle_name):
+        """((x, y, z), (w, x, y, z)): the vehicle's pose, NED from its start (its home)."""
+        self._s.actor(vehicle_name)
+        return self._mc.pose(vehicle_name)
+
+    def _set_vehicle_pose(self, pos, q, vehicle_name):
+        self._mc.set_pose(pos, q, vehicle_name)
+
+    def _vehicle_home(self, actor):
+        """The vehicle's start (world ENU x, y, z); None before it has a state."""
+        d = self._client.drone_state(actor)
+        return tuple(d['home'][:3]) if d else None
+
+    def _vehicle_setting(self, vehicle_name):
+        return self._s.vehicle_setting(vehicle_name)
+
+    def _default_cameras(self, actor):
+        """AirSim's cameras of the vehicle's pawn: name -> mount (x, y, z m FRD; roll, pitch, yaw deg)."""
+        return _DEFAULT_CAMERAS
+
     # --- connection ---
     def reset(self):
-        """AirSim's reset: every vehicle back to its start (its settings pose), at rest,
-        disarmed and without API control, its command cancelled; the rest of the world
-        (cars, walkers, lights) goes on."""
+        """AirSim's reset: every vehicle back to its start (its settings pose), at rest: a
+        drone disarmed and without API control, its command cancelled; an AirSim car with
+        CarControls() applied, its API control kept (CarPawnApi); the rest of the world
+        (other cars, walkers, lights) goes on."""
         s = self._s
         with s.lock:
             s.ensure_vehicles()
@@ -664,6 +854,8 @@ class VehicleClient:
                 finally:
                     self._mc.enable_api_control(False, name)
                 actors.append(a['id'])
+            for a in s.airsim_cars():
+                s.reset_car(a)
             s.manual.clear()
             s.rc.clear()
             s.cameras.clear()
@@ -744,11 +936,11 @@ class VehicleClient:
 
     def getHomeGeoPoint(self, vehicle_name=''):
         """The vehicle's home (its start) through the map's geo-reference."""
-        a = self._s.actor(vehicle_name)
-        h = self._client.drone_state(a)
+        a = self._vehicle(vehicle_name)
+        h = self._vehicle_home(a)
         if h is None:
-            _unsupported('getHomeGeoPoint(%r)' % vehicle_name, 'the vehicle has no air state yet')
-        return GeoPoint(*self._s.enu_to_geo(*h['home'][:3]))
+            _unsupported('getHomeGeoPoint(%r)' % vehicle_name, 'the vehicle has no state yet')
+        return GeoPoint(*self._s.enu_to_geo(*h))
 
     # --- environment ---
     def simSetLightIntensity(self, light_name, intensity):
@@ -796,10 +988,10 @@ class VehicleClient:
     # --- images ---
     def _camera(self, vehicle_name, camera_name, call):
         """(actor, canonical camera name, mount (x y z roll pitch yaw, FRD), fov or None, capture settings)."""
-        a = self._s.actor(vehicle_name)
-        v = self._s.vehicle_setting(vehicle_name)
+        a = self._vehicle(vehicle_name)
+        v = self._vehicle_setting(vehicle_name)
         name = str(camera_name)
-        cams = dict(_DEFAULT_CAMERAS)
+        cams = dict(self._default_cameras(a))
         name = _CAMERA_ALIASES.get(name, name)
         cs = v.cameras.get(name) if v else None
         if name not in cams and cs is None:
@@ -827,7 +1019,7 @@ class VehicleClient:
 
     def _camera_world(self, actor, vehicle_name, mount):
         """The camera's pose in the vehicle's NED frame (from its home)."""
-        p, q = self._mc.pose(vehicle_name)
+        p, q = self._vehicle_pose(vehicle_name)
         mq = geo.frd_euler_deg_to_quat(mount[3], mount[4], mount[5])
         return geo.compose(_v(p), _q(q), Vector3r(*mount[:3]), mq)
 
@@ -1011,7 +1203,7 @@ class VehicleClient:
         return not (0 <= dist < reach - 1e-3)
 
     def simTestLineOfSightToPoint(self, point, vehicle_name=''):
-        a = self._s.actor(vehicle_name)
+        a = self._vehicle(vehicle_name)
         t = self._client.state(a)['transform']
         return self._ray_clear('simTestLineOfSightToPoint', tuple(t[:3]),
                                self._s.geo_to_enu(point.latitude, point.longitude, point.altitude))
@@ -1051,8 +1243,7 @@ class VehicleClient:
 
     def simSetVehiclePose(self, pose, ignore_collision, vehicle_name=''):
         """Teleports; NaN components keep the current value, as AirSim; the quaternion is normalised."""
-        self._s.actor(vehicle_name)
-        cur_p, cur_q = self._mc.pose(vehicle_name)
+        cur_p, cur_q = self._vehicle_pose(vehicle_name)
         p, o = pose.position, pose.orientation
         pos = tuple(c if math.isnan(n) else n for n, c in zip((p.x_val, p.y_val, p.z_val), cur_p))
         if o.containsNan():
@@ -1062,18 +1253,17 @@ class VehicleClient:
             if n < 1e-9:
                 raise lockstep.ClientError('simSetVehiclePose: the orientation is a zero quaternion')
             q = (o.w_val / n, o.x_val / n, o.y_val / n, o.z_val / n)
-        self._mc.set_pose(pos, q, vehicle_name)
+        self._set_vehicle_pose(pos, q, vehicle_name)
 
     def simGetVehiclePose(self, vehicle_name=''):
-        self._s.actor(vehicle_name)
-        p, q = self._mc.pose(vehicle_name)
+        p, q = self._vehicle_pose(vehicle_name)
         return Pose(_v(p), _q(q))
 
     def simSetTraceLine(self, color_rgba, thickness=1.0, vehicle_name=''):
         """The trace's colour and thickness (kept; the trace is drawn by no viewport)."""
         if len(color_rgba) != 4 or any(not 0 <= float(c) <= 1 for c in color_rgba):
             raise lockstep.ClientError('simSetTraceLine: color_rgba is 4 values in [0, 1], got %r' % (color_rgba,))
-        a = self._s.actor(vehicle_name)
+        a = self._vehicle(vehicle_name)
         self._s.trace[a] = (tuple(float(c) for c in color_rgba), float(thickness))
 
     # --- scene objects: the run's actors by name ---
@@ -1257,7 +1447,7 @@ class VehicleClient:
         a, cam, mount, fov_over, cs = self._camera(vehicle_name, camera_name, 'simGetDetections')
         w, h, fov = self._capture(cs, int(image_type), fov_over)
         cp, cq = self._camera_world(a, vehicle_name, mount)
-        home = self._client.drone_state(a)['home'][:3]
+        home = self._vehicle_home(a)
         f = w / 2.0 / math.tan(math.radians(fov) / 2)
         out = []
         for name, actor in sorted(self._objects().items()):
@@ -1323,11 +1513,11 @@ class VehicleClient:
 
     def simGetGroundTruthEnvironment(self, vehicle_name=''):
         """The standard atmosphere at the vehicle's altitude (AirSim's EnvironmentState)."""
-        a = self._s.actor(vehicle_name)
-        s = self._mc.state(vehicle_name)
+        a = self._vehicle(vehicle_name)
+        p, _ = self._vehicle_pose(vehicle_name)
         t = self._client.state(a)['transform']
         e = EnvironmentState()
-        e.position = _v(s['position'])
+        e.position = _v(p)
         e.geo_point = GeoPoint(*self._s.enu_to_geo(*t[:3]))
         alt = e.geo_point.altitude
         temp = 288.15 - 0.0065 * alt
@@ -1342,7 +1532,7 @@ class VehicleClient:
 
     # --- sensors: settings.json's, else AirSim's defaults, spawned on first use ---
     def _sensor_setting(self, vehicle_name, kind, name, call):
-        v = self._s.vehicle_setting(vehicle_name)
+        v = self._vehicle_setting(vehicle_name)
         declared = [s for s in (v.sensors.values() if v else []) if s.kind == kind and s.enabled]
         if name:
             for s in declared:
@@ -1354,7 +1544,7 @@ class VehicleClient:
         return declared[0] if declared else None
 
     def _sensor(self, call, vehicle_name, kind, name, blueprint, attrs=None, newer=False):
-        a = self._s.actor(vehicle_name)
+        a = self._vehicle(vehicle_name)
         st = self._sensor_setting(vehicle_name, kind, name, call)
         mount = (0.0,) * 6
         if st is not None:
@@ -1442,7 +1632,7 @@ class VehicleClient:
                  'points_per_second': str(p['points_per_second']), 'rotation_frequency': repr(p['rotations_per_second']),
                  'upper_fov': repr(p['upper']), 'lower_fov': repr(p['lower']), 'horizontal_fov': repr(width),
                  'dropoff_general_rate': '0', 'noise_stddev': '0', 'atmosphere_attenuation_rate': '0'}
-        a = self._s.actor(vehicle_name)
+        a = self._vehicle(vehicle_name)
         mount = (0.0, 0.0, -1.0, 0.0, 0.0, 0.0)
         if st is not None:
             mount = tuple(getattr(st, k) or 0.0 for k in ('x', 'y', 'z', 'roll', 'pitch', 'yaw'))
@@ -1457,7 +1647,7 @@ class VehicleClient:
             c, sn = math.cos(math.radians(center)), math.sin(math.radians(center))
             x, y = pts[:, 0].copy(), pts[:, 1].copy()
             pts[:, 0], pts[:, 1] = c * x - sn * y, sn * x + c * y
-        vp, vq = self._mc.pose(vehicle_name)
+        vp, vq = self._vehicle_pose(vehicle_name)
         lp, lq = geo.compose(_v(vp), _q(vq), Vector3r(*mount[:3]), geo.frd_euler_deg_to_quat(*mount[3:]))
         out = LidarData()
         out.time_stamp = int(round(s.sim_time * 1e9))
@@ -1915,42 +2105,70 @@ def _kinematics(s):
 
 
 # --------------------------------------------------------------------------- CarClient
+# AirSim's car cameras (its car pawn's): name -> mount as a function of the car's half extents
+# (x, y, z m FRD from the car's centre; roll, pitch, yaw deg). Lockstep's placement: the front
+# ones at the top of the windscreen, fpv at the driver's eyes, back_center at the rear window.
+_CAR_CAMERAS = {
+    'front_center': lambda hx, hy, hz: (0.25 * hx, 0.0, -0.9 * hz, 0.0, 0.0, 0.0),
+    'front_right': lambda hx, hy, hz: (0.25 * hx, 0.5 * hy, -0.9 * hz, 0.0, 0.0, 0.0),
+    'front_left': lambda hx, hy, hz: (0.25 * hx, -0.5 * hy, -0.9 * hz, 0.0, 0.0, 0.0),
+    'fpv': lambda hx, hy, hz: (-0.1 * hx, -0.4 * hy, -0.6 * hz, 0.0, 0.0, 0.0),
+    'back_center': lambda hx, hy, hz: (-0.7 * hx, 0.0, -0.9 * hz, 0.0, 0.0, 180.0),
+}
+_API_MARKER = 'airsim_api_control'      # role_name of the actor that holds a car's API control
+_COLLISION_SENSOR = 'airsim_collision'  # role_name of the collision sensor simGetCollisionInfo reads
+_IDLE_RPM = 1000.0                      # ground_sim's engine below idle: the clutch slips (vehicle_dynamics.cpp)
+
+
+def _engine_rpm(phys, gear, forward_speed, throttle):
+    """The engine speed of ground_sim's powertrain (vehicle_dynamics.cpp): the driven wheels'
+    speed through the gear and the final drive (0 in neutral and at rest), at least the idle
+    speed while the throttle is pressed (the clutch slips there), at most max_rpm."""
+    gears = phys['forward_gears']
+    if gear == 0 or not gears:
+        ratio = 0.0
+    elif gear < 0:
+        ratio = gears[0][0]
+    else:
+        ratio = gears[min(gear, len(gears)) - 1][0]
+    rpm = abs(forward_speed) / phys['wheel_radius'] * ratio * phys['final_ratio'] * 60.0 / (2.0 * math.pi)
+    if throttle > 0.0:
+        rpm = max(rpm, _IDLE_RPM)
+    return min(rpm, phys['max_rpm'])
+
+
 class CarClient(VehicleClient):
-    """AirSim's CarClient on ground_sim's vehicles: SimMode "Car" or a car named by its
+    """AirSim's CarClient on ground_sim's vehicles: SimMode "Car" (the settings' cars at their
+    poses from the player start, the map's first vehicle spawn point) or a car named by its
     role_name (or 'Car<id>'). As AirSim's PhysXCar (CarPawnApi, CarPawnSimApi): API control
-    starts off; without it the car gets AirSim's keyboard/joystick controls (none pressed:
-    CarControls()) every frame, so setCarControls has no lasting effect; a change of API
-    control starts from CarControls(); arming is not a car's (True)."""
+    starts off and is the car's, whichever client or process takes it; without it the car gets
+    AirSim's keyboard/joystick controls (none pressed: CarControls()) every frame, so
+    setCarControls has no lasting effect; a change of API control starts from CarControls();
+    arming is not a car's (True). The VehicleClient calls (poses, kinematics, collisions,
+    sensors, cameras) address the car."""
 
     def _car(self, vehicle_name):
+        s = self._s
+        s.ensure_cars()
         cars = [a for a in self._client.actors() if a['kind'] == 'vehicle']
         if not vehicle_name:
             # AirSim's default vehicle: the settings' first car (else AirSim's PhysXCar), else any car.
-            s = self._s.load_settings()
-            names = [v.name for v in s.all_vehicles() if v.mode == 'Car'] + ['PhysXCar']
-            for n in names:
+            for n in s.airsim_car_names():
                 for a in cars:
                     if a['attributes'].get('role_name', '') == n:
-                        return a
+                        return s.watch_car(a)
         for a in cars:
             role = a['attributes'].get('role_name', '')
             if not vehicle_name or vehicle_name in (role, 'Car%d' % a['id']):
-                return a
+                return s.watch_car(a)
         if not vehicle_name and not cars:
-            s = self._s.load_settings()
-            v = s.all_vehicles()[0] if s.sim_mode == 'Car' else None
-            name = v.name if v else 'PhysXCar'
-            sx, sy, sz = self._s.start()
-            try:
-                sp = self._client.map().spawn_points(25.0)[0]
-                pose = (sp[0], sp[1], sp[2] + 0.3) + geo.ned_to_enu_quat(Quaternionr())
-            except (lockstep.ClientError, IndexError):
-                pose = (sx, sy, sz + 0.3, 1.0, 0.0, 0.0, 0.0)
-            bps = sorted(d['id'] for d in self._client.blueprints(1.0) if d['id'].startswith('vehicle.'))
-            if not bps:
-                _unsupported('CarClient', 'no ground_sim service is running')
-            self._client.spawn(bps[0], pose, {'role_name': name})
-            self._s.wait_frames(2)
+            sp = s.car_start()
+            if sp is None:
+                sx, sy, sz = s.start()
+                sp = (sx, sy, sz, 0.0)
+            q = (math.cos(sp[3] / 2), 0.0, 0.0, math.sin(sp[3] / 2))
+            s.spawn_car(s.airsim_car_names()[0], (sp[0], sp[1], sp[2] + _CAR_HEIGHT) + q)
+            s.wait_frames(2)
             return self._car(vehicle_name)
         raise lockstep.ClientError("no car named '%s'" % vehicle_name)
 
@@ -1958,27 +2176,106 @@ class CarClient(VehicleClient):
         return (self._client.world_info()['run'], a['id'])
 
     def _apply(self, a, controls):
-        reverse = controls.is_manual_gear and controls.manual_gear < 0 or controls.throttle < 0
-        self._client.submit({'type': 'vehicle_control', 'actor': a['id'], 'throttle': float(min(abs(controls.throttle), 1)),
-                             'steer': float(max(-1.0, min(1.0, controls.steering))), 'brake': float(controls.brake),
-                             'hand_brake': bool(controls.handbrake), 'reverse': bool(reverse),
-                             'manual_gear_shift': bool(controls.is_manual_gear), 'gear': int(controls.manual_gear)})
+        self._client.submit(dict(_car_wire_controls(controls), type='vehicle_control', actor=a['id']))
 
-    # --- API control: the car's (held by this process: a car has no API control flag on the wire) ---
+    # --- the vehicle of the VehicleClient calls: the car ---
+    def _vehicle(self, vehicle_name):
+        return self._car(vehicle_name)['id']
+
+    def _car_state(self, a):
+        st = self._client.state(a['id'])
+        if st is None:
+            raise lockstep.ClientError("car %d has no state yet (is ground_sim running?)" % a['id'])
+        return st
+
+    def _vehicle_pose(self, vehicle_name):
+        a = self._car(vehicle_name)
+        t = self._car_state(a)['transform']
+        q = geo.enu_to_ned_quat(t[3:7])
+        return geo.enu_to_ned_pos(t[:3], a['spawn_transform'][:3]), (q.w_val, q.x_val, q.y_val, q.z_val)
+
+    def _set_vehicle_pose(self, pos, q, vehicle_name):
+        a = self._car(vehicle_name)
+        enu = geo.ned_to_enu_pos(pos, a['spawn_transform'][:3])
+        qe = geo.ned_to_enu_quat(Quaternionr(q[1], q[2], q[3], q[0]))
+        self._client.submit({'type': 'set_transform', 'actor': a['id'], 'transform': tuple(enu) + tuple(qe)})
+
+    def _vehicle_home(self, actor):
+        a = self._client.actor(actor)
+        return tuple(a['spawn_transform'][:3]) if a else None
+
+    def _vehicle_setting(self, vehicle_name):
+        a = self._car(vehicle_name)
+        return self._s.car_setting(a['attributes'].get('role_name', ''))
+
+    def _default_cameras(self, actor):
+        st = self._client.state(actor)
+        hx, hy, hz = st['half_extents'] if st else (2.0, 0.9, 0.75)
+        return {name: f(hx, hy, hz) for name, f in _CAR_CAMERAS.items()}
+
+    def _car_kinematics(self, a, st):
+        """KinematicsState in NED from the car's start (angular velocity in the body FRD frame)."""
+        v = st['velocity']
+        q = st['transform'][3:7]
+        k = KinematicsState()
+        k.position = _v(geo.enu_to_ned_pos(st['transform'][:3], a['spawn_transform'][:3]))
+        k.orientation = geo.enu_to_ned_quat(q)
+        k.linear_velocity = _v(geo.enu_to_ned_pos(v, (0, 0, 0)))
+        w = _rotate_vector(Quaternionr(-q[1], -q[2], -q[3], q[0]), Vector3r(*st['angular_velocity']))   # body FLU
+        k.angular_velocity = Vector3r(w.x_val, -w.y_val, -w.z_val)   # body FRD
+        k.linear_acceleration = _v(geo.enu_to_ned_pos(st['acceleration'], (0, 0, 0)))
+        return k
+
+    def simGetGroundTruthKinematics(self, vehicle_name=''):
+        a = self._car(vehicle_name)
+        return self._car_kinematics(a, self._car_state(a))
+
+    def simSetKinematics(self, state, ignore_collision, vehicle_name=''):
+        """Pose, linear velocity (world NED) and angular velocity (body FRD) at once."""
+        a = self._car(vehicle_name)
+        o = state.orientation
+        p = state.position
+        self._set_vehicle_pose((p.x_val, p.y_val, p.z_val), (o.w_val, o.x_val, o.y_val, o.z_val), vehicle_name)
+        lv = state.linear_velocity
+        w = state.angular_velocity
+        w_world = _rotate_vector(o, w)   # body FRD -> world NED
+        c = self._client
+        c.submit({'type': 'actor_physics', 'actor': a['id'], 'kind': 'set_target_velocity',
+                  'value': geo.ned_to_enu_pos((lv.x_val, lv.y_val, lv.z_val), (0.0, 0.0, 0.0))})
+        c.submit({'type': 'actor_physics', 'actor': a['id'], 'kind': 'set_target_angular_velocity',
+                  'value': geo.ned_to_enu_pos((w_world.x_val, w_world.y_val, w_world.z_val), (0.0, 0.0, 0.0))})
+
+    def simGetCollisionInfo(self, vehicle_name=''):
+        """The car's last collision since its start or reset (AirSim's PawnSimApi keeps it):
+        from a collision sensor on the car (needs the sensors service)."""
+        a = self._car(vehicle_name)
+        return self._s.car_collision(a, self._car_state(a), 'simGetCollisionInfo')
+
+    def cancelLastTask(self, vehicle_name=''):
+        """AirSim's VehicleApiBase::cancelLastTask: a car runs no tasks; nothing to cancel."""
+        self._car(vehicle_name)
+
+    def listVehicles(self):
+        self._s.ensure_cars()
+        names = set(self._s.airsim_car_names())
+        cars = [a['attributes'].get('role_name', '') for a in self._client.actors() if a['kind'] == 'vehicle']
+        return self._mc.list_vehicles() + [n for n in cars if n in names]
+
+    # --- API control: the car's, whichever client or process takes it ---
     def enableApiControl(self, is_enabled, vehicle_name=''):
         from .types import CarControls
         a = self._car(vehicle_name)
         with self._s.lock:
-            if self._s.car_api.get(self._key(a), False) == bool(is_enabled):
+            if self._s.car_api_enabled(a) == bool(is_enabled):
                 return
-            self._s.car_api[self._key(a)] = bool(is_enabled)
-            self._s.car_controls[self._key(a)] = CarControls()   # CarPawnApi::enableApiControl: last_controls_ = CarControls()
+            self._s.set_car_api(a, bool(is_enabled))
+            # CarPawnApi::enableApiControl: last_controls_ = CarControls(), until controls are set again.
+            self._s.car_controls[self._key(a)] = (CarControls(), math.inf)
             if not is_enabled:
                 self._apply(a, CarControls())   # back to the keyboard/joystick: nothing pressed
 
     def isApiControlEnabled(self, vehicle_name=''):
-        a = self._car(vehicle_name)
-        return self._s.car_api.get(self._key(a), False)
+        return self._s.car_api_enabled(self._car(vehicle_name))
 
     def armDisarm(self, arm, vehicle_name=''):
         """AirSim's CarPawnApi::armDisarm: cars are not armed; True."""
@@ -1988,29 +2285,43 @@ class CarClient(VehicleClient):
     def setCarControls(self, controls, vehicle_name=''):
         a = self._car(vehicle_name)
         with self._s.lock:
-            if not self._s.car_api.get(self._key(a), False):
+            if not self._s.car_api_enabled(a):
                 # CarPawnSimApi::updateCarControls: without API control the keyboard/joystick
                 # controls replace these in the frame they were set.
                 return
-            self._s.car_controls[self._key(a)] = controls
+            self._s.car_controls[self._key(a)] = (controls, self._client.frame())
             self._apply(a, controls)
 
     def getCarControls(self, vehicle_name=''):
+        """The controls last set under API control (by any client: the car's applied control
+        once another process set newer ones); CarControls() without API control."""
         from .types import CarControls
         a = self._car(vehicle_name)
-        if not self._s.car_api.get(self._key(a), False):
+        if not self._s.car_api_enabled(a):
             return CarControls()   # the keyboard/joystick's, nothing pressed
-        return self._s.car_controls.get(self._key(a), CarControls())
+        mine, frame = self._s.car_controls.get(self._key(a), (None, -1))
+        st = self._client.state(a['id'])
+        if mine is not None and (st is None or st['frame'] <= frame or
+                                 _same_controls(st['control'], _car_wire_controls(mine))):
+            return mine   # this process's, set last (or not yet applied)
+        if st is None:
+            return CarControls()
+        c = st['control']   # another client's, as the car applies them
+        out = CarControls()
+        out.throttle = -c['throttle'] if c['reverse'] and not c['manual_gear_shift'] else c['throttle']
+        out.steering, out.brake, out.handbrake = c['steer'], c['brake'], bool(c['hand_brake'])
+        out.is_manual_gear = bool(c['manual_gear_shift'])
+        out.manual_gear = int(c['gear']) if out.is_manual_gear else 0
+        return out
 
     def getCarState(self, vehicle_name=''):
         """speed: forward speed (m/s, negative backwards, as Unreal's GetForwardSpeed); gear the
-        gearbox's; handbrake the API's; kinematics in NED from the car's start (angular
-        velocity in the body FRD frame); rpm 0 (the engine's speed is not on the wire), maxrpm
-        the physics control's."""
-        from .types import CarControls
+        gearbox's; rpm the engine's (ground_sim's powertrain: the wheels' speed through the gear
+        and the final drive, at least idle while the throttle is pressed), maxrpm the physics
+        control's; handbrake the API's; kinematics in NED from the car's start (angular velocity
+        in the body FRD frame); collision simGetCollisionInfo's."""
         a = self._car(vehicle_name)
         st = self._client.state(a['id'])
-        home = a['spawn_transform'][:3]
         out = CarState()
         if st is None:
             return out
@@ -2020,19 +2331,45 @@ class CarClient(VehicleClient):
         out.speed = v[0] * fwd.x_val + v[1] * fwd.y_val + v[2] * fwd.z_val
         out.gear = int(st.get('gear', 0))
         phys = self._client.vehicle_physics(a['id'])
-        out.maxrpm = float(phys['max_rpm']) if phys else 0.0
-        ctl = self._s.car_controls.get(self._key(a), CarControls()) if self._s.car_api.get(self._key(a), False) else CarControls()
-        out.handbrake = bool(ctl.handbrake)
-        k = KinematicsState()
-        k.position = _v(geo.enu_to_ned_pos(st['transform'][:3], home))
-        k.orientation = geo.enu_to_ned_quat(q)
-        k.linear_velocity = _v(geo.enu_to_ned_pos(v, (0, 0, 0)))
-        w = _rotate_vector(Quaternionr(-q[1], -q[2], -q[3], q[0]), Vector3r(*st['angular_velocity']))   # body FLU
-        k.angular_velocity = Vector3r(w.x_val, -w.y_val, -w.z_val)   # body FRD
-        k.linear_acceleration = _v(geo.enu_to_ned_pos(st['acceleration'], (0, 0, 0)))
-        out.kinematics_estimated = k
+        if phys:
+            out.maxrpm = float(phys['max_rpm'])
+            out.rpm = float(_engine_rpm(phys, out.gear, out.speed, st['control']['throttle']))
+        out.handbrake = bool(self.getCarControls(vehicle_name).handbrake)
+        out.kinematics_estimated = self._car_kinematics(a, st)
+        try:
+            out.collision = self._s.car_collision(a, st, None)
+        except LockstepUnsupported:
+            pass   # no sensors service: CarState's CollisionInfo() (nothing known)
         out.timestamp = int(round(self._s.sim_time() * 1e9))
         return out
+
+
+_CAR_HEIGHT = 0.8   # m above the road where a car is spawned (its box centre; it settles ~3 cm lower)
+
+
+def _car_wire_controls(controls):
+    """AirSim's CarControls as ground_sim's vehicle_control fields (CarPawnApi::setCarControls:
+    a negative throttle or gear drives backwards)."""
+    reverse = controls.is_manual_gear and controls.manual_gear < 0 or controls.throttle < 0
+    return {'throttle': float(min(abs(controls.throttle), 1)), 'steer': float(max(-1.0, min(1.0, controls.steering))),
+            'brake': float(controls.brake), 'hand_brake': bool(controls.handbrake), 'reverse': bool(reverse),
+            'manual_gear_shift': bool(controls.is_manual_gear), 'gear': int(controls.manual_gear)}
+
+
+def _same_controls(wire, want):
+    for k, v in want.items():
+        if k == 'gear' and not want['manual_gear_shift']:
+            continue
+        w = wire[k]
+        if isinstance(v, float):
+            if abs(float(w) - v) > 1e-6:
+                return False
+        elif isinstance(v, bool):
+            if bool(w) != v:
+                return False
+        elif int(w) != v:
+            return False
+    return True
 
 
 # --------------------------------------------------------------------------- helpers

@@ -131,6 +131,7 @@ class VehicleSetting:
         self.name, self.vehicle_type = name, vehicle_type
         self.x = self.y = self.z = 0.0            # m, NED from the player start
         self.roll = self.pitch = self.yaw = 0.0   # deg
+        self.yaw_given = False                    # no Yaw: a car takes the player start's heading (AirSim's)
         self.auto_create = True
         self.cameras = {}
         self.sensors = {}
@@ -316,6 +317,7 @@ class _Reader:
                       'ArduRover, ComputerVision' % vtype)
         v = VehicleSetting(name, vtype)
         self.pose(obj, where, v, (0.0,) * 6)
+        v.yaw_given = 'Yaw' in obj
         v.auto_create = self.boolean(obj, 'AutoCreate', where, True)
         v.default_state = self.string(obj, 'DefaultVehicleState', where, 'Armed', ('Armed', 'Disarmed', 'Inactive', ''))
         v.allow_api_always = self.boolean(obj, 'AllowAPIAlways', where, True)

@@ -6,40 +6,20 @@
 #include <type_traits>
 #include <utility>
 
-#include "lockstep/map/map.h"
-#include "lockstep/map/scene.h"
 #include "lockstep/map/scene_mesh.h"
 #include "lockstep/runtime/error.h"
 #include "lockstep/runtime/hash.h"
+#include "lockstep/runtime/wire_geometry.h"
 
 #include "lockstep/runtime/log.h"
 
 namespace lockstep {
 namespace {
 
-air::Vec3 ToVec(const msg::Vector3& v) { return {v.x(), v.y(), v.z()}; }
-msg::Vector3 FromVec(const air::Vec3& v) {
-  msg::Vector3 m;
-  m.x(v.x());
-  m.y(v.y());
-  m.z(v.z());
-  return m;
-}
-air::Pose ToPose(const msg::Pose& p) {
-  air::Pose out;
-  out.position = ToVec(p.position());
-  out.orientation = air::Quat(p.orientation().w(), p.orientation().x(), p.orientation().y(), p.orientation().z()).normalized();
-  return out;
-}
-msg::Pose FromPose(const air::Pose& p) {
-  msg::Pose out;
-  out.position(FromVec(p.position));
-  out.orientation().w(p.orientation.w());
-  out.orientation().x(p.orientation.x());
-  out.orientation().y(p.orientation.y());
-  out.orientation().z(p.orientation.z());
-  return out;
-}
+using wire::FromPose;
+using wire::FromVec;
+using wire::ToVec;
+air::Pose ToPose(const msg::Pose& p) { return wire::ToPose<air::Pose>(p); }
 double Timeout(double t) { return t > 0 ? t : air::kForever; }
 air::YawMode Yaw(const msg::YawMode& y) { return air::YawMode{y.is_rate(), y.value()}; }
 air::Drivetrain Drive(msg::Drivetrain d) {
@@ -55,16 +35,7 @@ msg::DroneCommandStatus ToWire(air::CommandStatus s) {
   }
   return msg::DroneCommandStatus::DRONE_CMD_NONE;
 }
-msg::ObjectKind ToWire(air::ObjectKind k) {
-  switch (k) {
-    case air::ObjectKind::kNone: return msg::ObjectKind::OBJECT_NONE;
-    case air::ObjectKind::kGround: return msg::ObjectKind::OBJECT_GROUND;
-    case air::ObjectKind::kStatic: return msg::ObjectKind::OBJECT_STATIC;
-    case air::ObjectKind::kVehicle: return msg::ObjectKind::OBJECT_VEHICLE;
-    case air::ObjectKind::kDrone: return msg::ObjectKind::OBJECT_DRONE;
-  }
-  return msg::ObjectKind::OBJECT_NONE;
-}
+msg::ObjectKind ToWire(air::ObjectKind k) { return wire::ObjectKindToWire(k); }
 
 // AirSim's adaptive lookahead factor: 0 on the wire = AirSim's default 1, < 0 = off.
 double AdaptiveLookahead(const msg::DroneCommand& d) {
@@ -329,13 +300,7 @@ AirService::AirService(Bus& bus, std::string name)
       ground_(bus, topics::kGroundState, static_cast<size_t>(QosHistoryDepth(QosKind::kState))),
       declarations_(bus),
       physics_writer_(bus, topics::kPhysicsEvents),
-      map_reader_(bus, topics::kMap, [this](const msg::MapData& m, const SampleInfo&) {
-        {
-          std::lock_guard<std::mutex> lock(map_mu_);
-          map_ = m;
-        }
-        map_cv_.notify_all();
-      }) {}
+      town_source_(bus) {}
 
 // The town's static meshes from the map the coordinator publishes (no shared disk needed):
 // roads, sidewalks, buildings, poles and trees become the drones' static collision mesh.
@@ -343,24 +308,15 @@ void AirService::LoadTown(const msg::WorldInfo& world) {
   if (world.map_name().to_string().empty()) {
     town_mesh_.reset();
     town_hash_ = 0;
-    geo_ = air::GeoReference{};
+    geo_ = map::GeoReference{};
     return;
   }
   if (world.map_hash() == town_hash_ && town_mesh_) return;  // same map as before: reuse
-  std::optional<msg::MapData> data;
-  {
-    std::unique_lock<std::mutex> lock(map_mu_);
-    map_cv_.wait_for(lock, std::chrono::seconds(30), [&] { return map_ && map_->content_hash() == world.map_hash(); });
-    if (map_ && map_->content_hash() == world.map_hash()) data = map_;
-  }
-  if (!data) throw InputError("air_sim: no map '" + world.map_name().to_string() + "' from the coordinator within 30 s");
-  const map::Map town = map::Map::FromString(data->opendrive(), data->name().to_string());
-  geo_ = air::ParseGeoReference(town.Data().header.geo_reference);
-  const map::Scene scene = data->scene().empty() ? map::GenerateScene(town, world.seed())
-                                                 : map::SceneFromYaml(data->scene(), data->name().to_string() + ".scene.yaml");
+  const auto town = town_source_.Load(world, "air_sim");
+  geo_ = town->geo;
   std::vector<float> xyz;
   std::vector<std::uint32_t> indices;
-  for (const auto& m : map::BuildWorldMeshes(town, scene)) {
+  for (const auto& m : map::BuildWorldMeshes(town->map, town->scene)) {
     // The ground plane is the model's own (exact, cheaper); the mesh adds what stands on it.
     if (m.semantic_tag == map::semantic::kGround) continue;
     const auto base = static_cast<std::uint32_t>(xyz.size() / 3);
@@ -369,7 +325,7 @@ void AirService::LoadTown(const msg::WorldInfo& world) {
   }
   town_mesh_ = air::StaticMesh::Build(xyz, indices, 4.0, 1);
   town_hash_ = world.map_hash();
-  spdlog::info("town '{}': {} triangles for drone contact", data->name().to_string(), town_mesh_->triangle_count());
+  spdlog::info("town '{}': {} triangles for drone contact", town->name, town_mesh_->triangle_count());
 }
 
 void AirService::BeginRun(const msg::WorldInfo& world) {
@@ -539,7 +495,7 @@ void AirService::Apply(const msg::Command& c, uint64_t frame, air::Commands* out
         // AirSim moveToGPS: the geodetic goal through the map's geo-reference, then a move.
         const auto& v = d.values();
         air::cmd::MoveToPosition m;
-        m.position = air::FromGeo(geo_, air::GeoPoint{v.size() > 0 ? v[0] : 0, v.size() > 1 ? v[1] : 0, v.size() > 2 ? v[2] : 0});
+        m.position = map::FromGeo(geo_, map::GeoPoint{v.size() > 0 ? v[0] : 0, v.size() > 1 ? v[1] : 0, v.size() > 2 ? v[2] : 0});
         m.velocity = d.velocity();
         m.timeout = Timeout(d.timeout());
         m.drivetrain = Drive(d.drivetrain());
@@ -724,7 +680,7 @@ msg::AirState AirService::Publish(const msg::FrameStamp& stamp) const {
     c.position(FromVec(s.collision.position));
     c.collision_count(s.collision.collision_count);
     d.collision(c);
-    const air::GeoPoint g = air::ToGeo(geo_, s.position);
+    const map::GeoPoint g = map::ToGeo(geo_, s.position);
     msg::GeoPoint gps;
     gps.latitude(g.latitude);
     gps.longitude(g.longitude);

@@ -13,6 +13,7 @@
 #include "lockstep/runtime/declarations.h"
 #include "lockstep/runtime/frame_buffer.h"
 #include "lockstep/runtime/service.h"
+#include "lockstep/runtime/town_source.h"
 #include "air_blueprints.h"
 
 namespace lockstep {
@@ -48,9 +49,6 @@ class AirService final : public ServiceCore {
   Writer<msg::AirState> state_writer_;
   Writer<msg::SimEvent> event_writer_;
   FrameBuffer<msg::GroundState> ground_;
-  std::mutex map_mu_;
-  std::condition_variable map_cv_;
-  std::optional<msg::MapData> map_;                       // latest map from the coordinator
   uint64_t town_hash_ = 0;                                // map whose mesh is in model_.statics
   std::shared_ptr<const air::StaticMesh> town_mesh_;
   // A required member declares vehicle or walker blueprints (lockstep/blueprints): use its
@@ -64,11 +62,11 @@ class AirService final : public ServiceCore {
   std::map<uint32_t, std::pair<uint64_t, msg::DroneCommandStatus>> last_command_;  // per drone
   std::vector<msg::SimEvent> pending_events_;
   Writer<msg::PhysicsEvents> physics_writer_;
-  air::GeoReference geo_;                 // the map's geo-reference (GPS, moveToGPS)
+  map::GeoReference geo_;                 // the map's geo-reference (GPS, moveToGPS)
   air::Vec3 api_wind_ = air::Vec3::Zero();  // m/s ENU, simSetWind (all drones)
   float wind_intensity_ = 0;              // weather's wind_intensity (0..100)
   double input_timeout_s_ = 10;           // s, world settings' service_timeout: no inputs -> fault
-  Reader<msg::MapData> map_reader_;  // last: its callback uses the members above
+  TownSource town_source_;  // the map the coordinator publishes
 };
 
 // DroneCommand (wire) -> air command body; empty optional with `why` set if it cannot map.

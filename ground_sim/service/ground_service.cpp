@@ -388,7 +388,7 @@ std::vector<ground::ExternalBody> GroundService::Drones(const msg::Tick& tick) {
       e.kind = ground::ObjectKind::kDrone;
       e.pose = ToPose(d.transform());
       e.velocity = ToVec(d.linear_velocity());
-      e.half_extents = ground::Vec3(0.3, 0.3, 0.1);
+      e.half_extents = wire::DroneHalfExtents();
       e.mass = 1.0;
       bodies.push_back(e);
     }

@@ -52,30 +52,6 @@ void DeclarePhysics(const ground::VehiclePhysics& p, std::vector<msg::AttributeD
 
 }  // namespace
 
-ground::Vec3 ToVec(const msg::Vector3& v) { return {v.x(), v.y(), v.z()}; }
-msg::Vector3 FromVec(const ground::Vec3& v) {
-  msg::Vector3 m;
-  m.x(v.x());
-  m.y(v.y());
-  m.z(v.z());
-  return m;
-}
-ground::Pose ToPose(const msg::Pose& p) {
-  ground::Pose out;
-  out.position = ToVec(p.position());
-  out.orientation = ground::Quat(p.orientation().w(), p.orientation().x(), p.orientation().y(), p.orientation().z()).normalized();
-  return out;
-}
-msg::Pose FromPose(const ground::Pose& p) {
-  msg::Pose out;
-  out.position(FromVec(p.position));
-  out.orientation().w(p.orientation.w());
-  out.orientation().x(p.orientation.x());
-  out.orientation().y(p.orientation.y());
-  out.orientation().z(p.orientation.z());
-  return out;
-}
-
 msg::VehiclePhysicsControl ToWire(const ground::VehiclePhysics& p) {
   msg::VehiclePhysicsControl m;
   for (auto [rpm, nm] : p.torque_curve) {
@@ -172,17 +148,7 @@ msg::LaneMarking ToWire(const map::LaneMarking& m) {
   return out;
 }
 
-msg::ObjectKind ToWire(ground::ObjectKind k) {
-  switch (k) {
-    case ground::ObjectKind::kNone: return msg::ObjectKind::OBJECT_NONE;
-    case ground::ObjectKind::kGround: return msg::ObjectKind::OBJECT_GROUND;
-    case ground::ObjectKind::kStatic: return msg::ObjectKind::OBJECT_STATIC;
-    case ground::ObjectKind::kVehicle: return msg::ObjectKind::OBJECT_VEHICLE;
-    case ground::ObjectKind::kWalker: return msg::ObjectKind::OBJECT_WALKER;
-    case ground::ObjectKind::kDrone: return msg::ObjectKind::OBJECT_DRONE;
-  }
-  return msg::ObjectKind::OBJECT_NONE;
-}
+msg::ObjectKind ToWire(ground::ObjectKind k) { return wire::ObjectKindToWire(k); }
 
 msg::TrafficLightColor ToWire(ground::LightColor c) {
   switch (c) {

@@ -6,13 +6,15 @@
 
 #include "lockstep/ground/world.h"
 #include "lockstep/runtime/messages.h"
+#include "lockstep/runtime/wire_geometry.h"
 
 namespace lockstep::ground_wire {
 
-ground::Vec3 ToVec(const msg::Vector3& v);
-msg::Vector3 FromVec(const ground::Vec3& v);
-ground::Pose ToPose(const msg::Pose& p);
-msg::Pose FromPose(const ground::Pose& p);
+// Vectors and poses: the runtime's converters (lockstep/runtime/wire_geometry.h).
+using wire::FromPose;
+using wire::FromVec;
+using wire::ToVec;
+inline ground::Pose ToPose(const msg::Pose& p) { return wire::ToPose<ground::Pose>(p); }
 msg::VehiclePhysicsControl ToWire(const ground::VehiclePhysics& p);
 ground::VehiclePhysics FromWire(const msg::VehiclePhysicsControl& p);
 msg::LaneMarking ToWire(const map::LaneMarking& m);

@@ -2,16 +2,6 @@
 
 namespace lockstep::sensors {
 
-Vec3 FromWire(const msg::Vector3& v) { return {v.x(), v.y(), v.z()}; }
-
-Quat FromWire(const msg::Quaternion& q) {
-  Quat out(q.w(), q.x(), q.y(), q.z());
-  if (out.norm() < 1e-9) return Quat::Identity();
-  return out.normalized();
-}
-
-Pose FromWire(const msg::Pose& p) { return Pose{FromWire(p.position()), FromWire(p.orientation())}; }
-
 void AppendActors(const msg::GroundState& g, std::vector<Actor>* out) {
   for (const auto& v : g.vehicles()) {
     Actor a;
@@ -44,7 +34,7 @@ void AppendActors(const msg::AirState& air, std::vector<Actor>* out) {
     a.kind = ActorKind::kDrone;
     a.blueprint = d.blueprint().to_string();
     a.pose = FromWire(d.transform());
-    a.half_extents = kDroneHalfExtents;
+    a.half_extents = wire::DroneHalfExtents();
     a.velocity = FromWire(d.linear_velocity());
     a.angular_velocity = a.pose.orientation * FromWire(d.angular_velocity());  // body -> world
     out->push_back(std::move(a));

@@ -5,16 +5,18 @@
 #include <vector>
 
 #include "lockstep/runtime/messages.h"
+#include "lockstep/runtime/wire_geometry.h"
 #include "lockstep/sensors/types.h"
 
 namespace lockstep::sensors {
 
-Vec3 FromWire(const msg::Vector3& v);
-Quat FromWire(const msg::Quaternion& q);  // an unset (zero) quaternion is no rotation
-Pose FromWire(const msg::Pose& p);
+// The runtime's converters (lockstep/runtime/wire_geometry.h) under the sensors' names.
+inline Vec3 FromWire(const msg::Vector3& v) { return wire::ToVec(v); }
+inline Quat FromWire(const msg::Quaternion& q) { return wire::ToQuat(q); }  // an unset (zero) quaternion is no rotation
+inline Pose FromWire(const msg::Pose& p) { return wire::ToPose<Pose>(p); }
 
 // Vehicles (with their light state) and walkers of a GroundState; drones of an AirState
-// (a box of kDroneHalfExtents, angular velocity turned to world). Appended in message order.
+// (a box of wire::DroneHalfExtents(), angular velocity turned to world). Appended in message order.
 void AppendActors(const msg::GroundState& g, std::vector<Actor>* out);
 void AppendActors(const msg::AirState& a, std::vector<Actor>* out);
 

@@ -3,8 +3,6 @@
 #include <algorithm>
 #include <filesystem>
 
-#include "lockstep/map/map.h"
-#include "lockstep/map/scene.h"
 #include "lockstep/map/scene_mesh.h"
 #include "lockstep/runtime/blueprint_builder.h"
 #include "lockstep/runtime/error.h"
@@ -17,40 +15,12 @@ namespace {
 
 namespace s = sensors;
 
-s::Vec3 ToVec(const msg::Vector3& v) { return s::FromWire(v); }
-msg::Vector3 FromVec(const s::Vec3& v) {
-  msg::Vector3 m;
-  m.x(v.x());
-  m.y(v.y());
-  m.z(v.z());
-  return m;
-}
-msg::Quaternion FromQuat(const s::Quat& q) {
-  msg::Quaternion m;
-  m.w(q.w());
-  m.x(q.x());
-  m.y(q.y());
-  m.z(q.z());
-  return m;
-}
+using wire::FromPose;
+using wire::FromQuat;
+using wire::FromVec;
+using wire::ToVec;
 s::Pose ToPose(const msg::Pose& p) { return s::FromWire(p); }
-msg::Pose FromPose(const s::Pose& p) {
-  msg::Pose m;
-  m.position(FromVec(p.position));
-  m.orientation(FromQuat(p.orientation));
-  return m;
-}
-msg::ObjectKind ToWire(s::HitKind k) {
-  switch (k) {
-    case s::HitKind::kNone: return msg::ObjectKind::OBJECT_NONE;
-    case s::HitKind::kGround: return msg::ObjectKind::OBJECT_GROUND;
-    case s::HitKind::kStatic: return msg::ObjectKind::OBJECT_STATIC;
-    case s::HitKind::kVehicle: return msg::ObjectKind::OBJECT_VEHICLE;
-    case s::HitKind::kWalker: return msg::ObjectKind::OBJECT_WALKER;
-    case s::HitKind::kDrone: return msg::ObjectKind::OBJECT_DRONE;
-  }
-  return msg::ObjectKind::OBJECT_NONE;
-}
+msg::ObjectKind ToWire(s::HitKind k) { return wire::ObjectKindToWire(k); }
 s::HitKind FromWire(msg::ObjectKind k) {
   switch (k) {
     case msg::ObjectKind::OBJECT_NONE: return s::HitKind::kNone;
@@ -138,13 +108,7 @@ SensorsService::SensorsService(Bus& bus, std::string name, SensorsOptions option
       ground_(bus, topics::kGroundState, static_cast<size_t>(QosHistoryDepth(QosKind::kState))),
       air_(bus, topics::kAirState, static_cast<size_t>(QosHistoryDepth(QosKind::kState))),
       events_(bus, static_cast<size_t>(QosHistoryDepth(QosKind::kState))),
-      map_reader_(bus, topics::kMap, [this](const msg::MapData& m, const SampleInfo&) {
-        {
-          std::lock_guard<std::mutex> lock(map_mu_);
-          map_ = m;
-        }
-        map_cv_.notify_all();
-      }) {}
+      town_source_(bus) {}
 
 SensorsService::~SensorsService() = default;
 
@@ -181,20 +145,11 @@ void SensorsService::LoadTown(const msg::WorldInfo& world) {
     return;
   }
   if (world.map_hash() == town_hash_ && town_meshes_) return;
-  std::optional<msg::MapData> data;
-  {
-    std::unique_lock<std::mutex> lock(map_mu_);
-    map_cv_.wait_for(lock, std::chrono::seconds(30), [&] { return map_ && map_->content_hash() == world.map_hash(); });
-    if (map_ && map_->content_hash() == world.map_hash()) data = map_;
-  }
-  if (!data) throw InputError("sensors: no map '" + world.map_name().to_string() + "' from the coordinator within 30 s");
-  const map::Map town = map::Map::FromString(data->opendrive(), data->name().to_string());
-  const map::Scene scene = data->scene().empty() ? map::GenerateScene(town, world.seed())
-                                                 : map::SceneFromYaml(data->scene(), data->name().to_string() + ".scene.yaml");
-  town_meshes_ = std::make_shared<const std::vector<map::Mesh>>(map::BuildWorldMeshes(town, scene));
-  geo_ = s::ParseGeoReference(town.Data().header.geo_reference);
+  const auto town = town_source_.Load(world, "sensors");
+  town_meshes_ = std::make_shared<const std::vector<map::Mesh>>(map::BuildWorldMeshes(town->map, town->scene));
+  geo_ = town->geo;
   town_hash_ = world.map_hash();
-  spdlog::info("town '{}': {} triangles for ray casting, geo reference {:.6f}, {:.6f}", data->name().to_string(),
+  spdlog::info("town '{}': {} triangles for ray casting, geo reference {:.6f}, {:.6f}", town->name,
                map::TotalTriangles(*town_meshes_), geo_.latitude, geo_.longitude);
 }
 

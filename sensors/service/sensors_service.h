@@ -15,6 +15,7 @@
 #include "lockstep/runtime/declarations.h"
 #include "lockstep/runtime/frame_buffer.h"
 #include "lockstep/runtime/service.h"
+#include "lockstep/runtime/town_source.h"
 #include "frame_actors.h"
 #include "lockstep/sensors/sensor_world.h"
 #include "sample_writer.h"
@@ -87,9 +88,6 @@ class SensorsService final : public ServiceCore {
   std::map<std::string, std::string> special_types_;  // vehicle blueprint -> special_type
 
   // The town: meshes and geo reference of the current map, kept across runs.
-  std::mutex map_mu_;
-  std::condition_variable map_cv_;
-  std::optional<msg::MapData> map_;
   uint64_t town_hash_ = 0;
   std::shared_ptr<const std::vector<map::Mesh>> town_meshes_;
   sensors::GeoReference geo_;
@@ -110,7 +108,7 @@ class SensorsService final : public ServiceCore {
   FrameBuffer<msg::GroundState> ground_;
   FrameBuffer<msg::AirState> air_;
   PhysicsEventsBuffer events_;
-  Reader<msg::MapData> map_reader_;  // last: its callback uses the members above
+  TownSource town_source_;  // the map the coordinator publishes
 };
 
 }  // namespace lockstep

@@ -1,48 +1,12 @@
 #include "lockstep/sensors/geo.h"
 
 #include <cmath>
-#include <sstream>
 
 namespace lockstep::sensors {
 
 namespace {
-constexpr double kEarthRadiusEquatorial = 6378137.0;  // m, carla::geom::GeoLocation
 constexpr double kDeg = M_PI / 180.0;
-}  // namespace
 
-GeoReference ParseGeoReference(const std::string& proj) {
-  GeoReference r;
-  std::istringstream in(proj);
-  std::string token;
-  while (in >> token) {
-    const auto eq = token.find('=');
-    if (eq == std::string::npos) continue;
-    const std::string key = token.substr(0, eq);
-    try {
-      if (key == "+lat_0") r.latitude = std::stod(token.substr(eq + 1));
-      if (key == "+lon_0") r.longitude = std::stod(token.substr(eq + 1));
-    } catch (const std::exception&) {
-      // CARLA leaves an unparsable value at its default too.
-    }
-  }
-  return r;
-}
-
-GeoPoint ToGeo(const GeoReference& ref, const Vec3& enu) {
-  // CARLA: LatLonToMercator at the reference, add (x, -y_unreal) = (x, y_enu) metres, back.
-  const double scale = std::cos(ref.latitude * kDeg);
-  double mx = scale * ref.longitude * kDeg * kEarthRadiusEquatorial;
-  double my = scale * kEarthRadiusEquatorial * std::log(std::tan((90.0 + ref.latitude) * M_PI / 360.0));
-  mx += enu.x();
-  my += enu.y();
-  GeoPoint p;
-  p.longitude = mx * 180.0 / (M_PI * kEarthRadiusEquatorial * scale);
-  p.latitude = 360.0 * std::atan(std::exp(my / (kEarthRadiusEquatorial * scale))) / M_PI - 90.0;
-  p.altitude = ref.altitude + enu.z();
-  return p;
-}
-
-namespace {
 double Geopotential(double altitude_km) {
   constexpr double kRadiusKm = 6356.766;
   return kRadiusKm * altitude_km / (kRadiusKm + altitude_km);

@@ -161,7 +161,7 @@ TEST_F(AirServiceTest, AirSimCallsOnTheWire) {
   EXPECT_NEAR(s->drones()[0].transform().position().x(), 4.0, 0.2);
   EXPECT_FALSE(s->drones()[0].can_arm()) << "flying";
   // moveToGPS through the geo-reference (no map here: lat_0 = lon_0 = 0): 3 m east.
-  const air::GeoPoint goal = air::ToGeo(air::GeoReference{}, air::Vec3(7, 2, 6));
+  const map::GeoPoint goal = map::ToGeo(map::GeoReference{}, air::Vec3(7, 2, 6));
   EXPECT_TRUE(Drone(drone, K::DRONE_MOVE_TO_GPS, 12, [&](msg::DroneCommand& d) {
                 d.values({goal.latitude, goal.longitude, goal.altitude});
                 d.velocity(2);

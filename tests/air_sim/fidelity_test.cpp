@@ -436,17 +436,5 @@ TEST(air_fidelity, SetKinematicsSetsPoseAndVelocities) {
   EXPECT_NEAR(sim.D(1).angular_velocity.z(), 0.5, 1e-6);
 }
 
-TEST(air_fidelity, GeoReferenceRoundTrip) {
-  const GeoReference ref = ParseGeoReference("+proj=tmerc +lat_0=49.0 +lon_0=8.4 +k=1 +x_0=0 +y_0=0 +datum=WGS84");
-  EXPECT_EQ(ref.latitude, 49.0);
-  EXPECT_EQ(ref.longitude, 8.4);
-  const Vec3 p(120.5, -340.25, 17);
-  const GeoPoint g = ToGeo(ref, p);
-  EXPECT_GT(g.longitude, 8.4);  // east
-  EXPECT_LT(g.latitude, 49.0);  // south
-  EXPECT_LT((FromGeo(ref, g) - p).norm(), 1e-6);
-  EXPECT_NEAR(ToGeo(ref, Vec3::Zero()).latitude, 49.0, 1e-9);
-}
-
 }  // namespace
 }  // namespace lockstep::air

@@ -161,6 +161,20 @@ TEST(Gnss, KnownOffsetGivesCarlasLatitudeAndLongitude) {
   EXPECT_DOUBLE_EQ(ParseGeoReference("").latitude, 0.0);
 }
 
+// The one geo projection (lockstep/map/geo.h) serves air_sim's GPS calls too: moveToGPS
+// goes back through FromGeo, the exact inverse.
+TEST(Gnss, TheProjectionRoundTripsThroughFromGeo) {
+  const GeoReference ref = ParseGeoReference("+proj=tmerc +lat_0=49.0 +lon_0=8.4 +k=1 +x_0=0 +y_0=0 +datum=WGS84");
+  EXPECT_EQ(ref.latitude, 49.0);
+  EXPECT_EQ(ref.longitude, 8.4);
+  const Vec3 p(120.5, -340.25, 17);
+  const GeoPoint g = ToGeo(ref, p);
+  EXPECT_GT(g.longitude, 8.4);  // east
+  EXPECT_LT(g.latitude, 49.0);  // south
+  EXPECT_LT((map::FromGeo(ref, g) - p).norm(), 1e-6);
+  EXPECT_NEAR(ToGeo(ref, Vec3::Zero()).latitude, 49.0, 1e-9);
+}
+
 TEST(Gnss, BiasAndNoiseApply) {
   SensorWorld w(1, GeoReference{49, 8, 0});
   ASSERT_EQ(w.Add(Spawn(10, "sensor.other.gnss", {{"noise_lat_bias", "0.001"}, {"noise_alt_stddev", "2"}})), "");

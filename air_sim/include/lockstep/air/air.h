@@ -5,7 +5,6 @@
 #include "lockstep/air/commands.h"
 #include "lockstep/air/controller.h"
 #include "lockstep/air/frames.h"
-#include "lockstep/air/geo.h"
 #include "lockstep/air/params.h"
 #include "lockstep/air/types.h"
 #include "lockstep/air/world.h"

@@ -117,7 +117,7 @@ struct ExternalBody {
   ObjectKind kind = ObjectKind::kDrone;
   Pose pose;
   Vec3 velocity = Vec3::Zero();
-  Vec3 half_extents = Vec3(0.3, 0.3, 0.1);
+  Vec3 half_extents = Vec3::Zero();  // m, the box its simulator gives (a drone's: lockstep/runtime/wire_geometry.h)
   double mass = 1.0;              // kg: a dynamic body of that mass within the step
 };
 

@@ -47,9 +47,6 @@ struct Actor {
   std::string special_type;                    // vehicles: the blueprint's special_type ("emergency", ...)
 };
 
-// A drone's box for ray hits: AirSim's generic quad spans about 0.55 m across its rotors.
-inline const Vec3 kDroneHalfExtents{0.3, 0.3, 0.1};
-
 // CARLA semantic tag of an actor (Car, Truck, Bus, Motorcycle, Bicycle, Pedestrian; drones
 // have no CARLA class: Dynamic).
 uint8_t ActorTag(const Actor& a);

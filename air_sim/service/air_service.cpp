@@ -550,8 +550,8 @@ std::vector<air::VehicleBox> AirService::Vehicles(const msg::Tick& tick) {
   // A ground service being replaced holds the wait (AwaitInput): no cascade of failures.
   auto ground = AwaitInput([&](std::chrono::milliseconds slice) { return ground_.WaitFor(tick.run(), tick.frame() - 1, slice); }, timeout);
   if (!ground) {
-    throw InputError(name_ + ": no GroundState of frame " + std::to_string(tick.frame() - 1) + " within " +
-                     std::to_string(input_timeout_s_) + " s; a missing input faults the run");
+    throw MissingInput(name_ + ": no GroundState of frame " + std::to_string(tick.frame() - 1) + " within " +
+                       std::to_string(input_timeout_s_) + " s; a missing input faults the run");
   }
   for (const auto& v : ground->vehicles()) {
     air::VehicleBox box;

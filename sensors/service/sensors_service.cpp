@@ -324,7 +324,7 @@ s::WorldFrame SensorsService::Gather(const msg::Tick& tick, uint64_t frame, s::F
   };
   if (ground_in_run_) {
     auto g = await(ground_);
-    if (!g) throw InputError("sensors: no GroundState of frame " + std::to_string(frame) + " within the input timeout");
+    if (!g) throw MissingInput("sensors: no GroundState of frame " + std::to_string(frame) + " within the input timeout");
     f.sim_time = g->stamp().sim_time();
     s::AppendActors(*g, &f.actors);
     for (auto& a : f.actors) {
@@ -333,7 +333,7 @@ s::WorldFrame SensorsService::Gather(const msg::Tick& tick, uint64_t frame, s::F
   }
   if (air_in_run_) {
     auto air = await(air_);
-    if (!air) throw InputError("sensors: no AirState of frame " + std::to_string(frame) + " within the input timeout");
+    if (!air) throw MissingInput("sensors: no AirState of frame " + std::to_string(frame) + " within the input timeout");
     f.sim_time = air->stamp().sim_time();
     s::AppendActors(*air, &f.actors);
   }
@@ -346,7 +346,7 @@ s::WorldFrame SensorsService::Gather(const msg::Tick& tick, uint64_t frame, s::F
   if (world_->HasEventSensors() && !event_publishers_.empty()) {
     auto batches = AwaitInput(
         [&](std::chrono::milliseconds slice) { return events_.WaitFor(tick.run(), frame, event_publishers_, slice); }, timeout);
-    if (!batches) throw InputError("sensors: no PhysicsEvents of frame " + std::to_string(frame) + " from every physics service within the input timeout");
+    if (!batches) throw MissingInput("sensors: no PhysicsEvents of frame " + std::to_string(frame) + " from every physics service within the input timeout");
     for (const auto& b : *batches) {
       for (const auto& c : b.collisions()) {
         events->collisions.push_back(s::CollisionEvent{c.actor(), c.other_actor(), FromWire(c.other_kind()), c.other_semantic_tag(),

@@ -10,6 +10,7 @@
 #include <thread>
 
 #include "air_service.h"
+#include "lockstep/runtime/blueprint_builder.h"
 #include "lockstep/runtime/command_builders.h"
 #include "lockstep/coordinator/coordinator.h"
 #include "lockstep/map/scene.h"
@@ -558,6 +559,63 @@ TEST(AirServiceGround, ClientLandsADroneOnACarDrivingAtFiveMetresPerSecond) {
   EXPECT_NEAR(d.linear_velocity().x(), CarOnlyGround::kSpeed, 0.3) << "carried by the car";
   EXPECT_NEAR(d.transform().position().x(), car_pos.x(), 1.0) << "still on the roof";
   EXPECT_GT(d.transform().position().z(), 1.5) << "on top of the roof, not through it";
+}
+
+// The core alone on the in-process bus, fed by hand. A member that declares vehicles (not
+// named "ground_sim") makes its GroundState of frame k-1 an input of frame k: a frame whose
+// vehicles did not come faults the run (MissingInput out of Step) and leaves the state as it
+// was, instead of stepping the drones without the cars (a state that would depend on when a
+// sample arrived).
+TEST(AirInputs, AFrameWithoutTheVehiclesOfTheFrameBeforeFaultsInsteadOfSteppingWithoutThem) {
+  auto bus = CreateInProcessBus();
+  Writer<msg::BlueprintSet> sets(*bus, topics::kBlueprints);
+  Writer<msg::GroundState> ground(*bus, topics::kGroundState);
+  msg::BlueprintSet cars;
+  cars.service("cars");
+  cars.blueprints({blueprint::Make("vehicle.lockstep.sedan", msg::ActorKind::ACTOR_VEHICLE, {blueprint::String("role_name", "")})});
+  sets.Write(cars);
+  AirService core(*bus);
+  msg::WorldInfo world;
+  world.run(1);
+  world.seed(7);
+  msg::WorldSettings settings = DefaultWorldSettings();
+  settings.service_timeout(0.3);  // how long a step waits for an input
+  world.settings(settings);
+  world.required_services({msg::ServiceName("air_sim"), msg::ServiceName("cars")});
+  core.BeginRun(world);
+  EXPECT_FALSE(core.StepNeverWaits());
+  auto tick = [](uint64_t frame) {
+    msg::Tick t;
+    t.run(1);
+    t.frame(frame);
+    t.dt(0.05);
+    t.sim_time(0.05 * static_cast<double>(frame));
+    return t;
+  };
+  msg::Tick first = tick(1);  // frame 1 reads no earlier frame
+  msg::Command spawn;
+  msg::CommandBody body = SpawnBody("drone.generic_quad", MakePose(3, 4, 0));
+  body.spawn_actor().actor(40);
+  body.spawn_actor().owner("air_sim");
+  spawn.body(body);
+  first.commands({spawn});
+  core.Step(first);
+  ASSERT_EQ(core.model().drones.size(), 1u);
+  const uint64_t hash = core.StateHash();
+  try {
+    core.Step(tick(2));
+    FAIL() << "frame 2 stepped without the GroundState of frame 1";
+  } catch (const MissingInput& e) {
+    EXPECT_NE(std::string(e.what()).find("no GroundState of frame 1"), std::string::npos) << e.what();
+  }
+  EXPECT_EQ(core.StateHash(), hash) << "the failed step changed the state";
+  // With the input there, the frame steps.
+  msg::GroundState g;
+  g.stamp().run(1);
+  g.stamp().frame(1);
+  ground.Write(g);
+  EXPECT_NO_THROW(core.Step(tick(2)));
+  EXPECT_NE(core.StateHash(), hash);
 }
 
 }  // namespace

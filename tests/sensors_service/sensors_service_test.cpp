@@ -16,6 +16,7 @@
 
 #include "air_service.h"
 #include "lockstep/coordinator/coordinator.h"
+#include "lockstep/runtime/blueprint_builder.h"
 #include "lockstep/runtime/command_builders.h"
 #include "observer.h"
 #include "sensors_service.h"
@@ -398,6 +399,104 @@ TEST(SensorsEvents, CollisionAndLaneInvasionStreamsFromPhysicsEvents) {
   EXPECT_EQ(invasions[0].crossed()[0].color().to_string(), "white");
 }
 
+
+// The core alone on the in-process bus, fed by hand. Members that declare vehicles and
+// drones (not named ground_sim or air_sim) make their GroundState and AirState of the frame
+// inputs of the sensors' step: a frame whose input did not come faults the run (MissingInput
+// out of Step) and leaves the state as it was, instead of sensing a world without those
+// actors (samples that would depend on when a state arrived).
+TEST(SensorsInputs, AFrameWithoutItsGroundOrAirStateFaultsInsteadOfSensingWithoutThem) {
+  auto bus = CreateInProcessBus();
+  Writer<msg::BlueprintSet> sets(*bus, topics::kBlueprints);
+  Writer<msg::GroundState> ground(*bus, topics::kGroundState);
+  Writer<msg::AirState> air(*bus, topics::kAirState);
+  auto declare = [&](const std::string& service, msg::ActorKind kind, const std::string& bp) {
+    msg::BlueprintSet set;
+    set.service(service);
+    set.blueprints({blueprint::Make(bp, kind, {blueprint::String("role_name", "")})});
+    sets.Write(set);
+  };
+  declare("cars", msg::ActorKind::ACTOR_VEHICLE, "vehicle.lockstep.sedan");
+  declare("flyers", msg::ActorKind::ACTOR_DRONE, "drone.flyer");
+  SensorsOptions options;
+  options.input_timeout_s = 0.3;  // how long a step waits for an input
+  SensorsService service(*bus, "sensors", options);
+  msg::BlueprintSet own;
+  own.service("sensors");
+  own.blueprints(service.Blueprints());
+  sets.Write(own);
+  msg::WorldInfo world;
+  world.run(1);
+  world.seed(3);
+  msg::WorldSettings settings = DefaultWorldSettings();
+  settings.perception_mode(msg::PerceptionMode::PERCEPTION_STRICT);
+  settings.service_timeout(0.3);
+  world.settings(settings);
+  world.required_services({msg::ServiceName("cars"), msg::ServiceName("flyers"), msg::ServiceName("sensors")});
+  service.BeginRun(world);
+  auto stamp = [](uint64_t k) {
+    msg::FrameStamp s;
+    s.run(1);
+    s.frame(k);
+    s.sim_time(0.05 * static_cast<double>(k));
+    return s;
+  };
+  auto publish_ground = [&](uint64_t k) {
+    msg::GroundState g;
+    g.stamp(stamp(k));
+    msg::VehicleState v;
+    v.actor(5);
+    v.blueprint("vehicle.lockstep.sedan");
+    v.transform(MakePose(10, 0, 0.75));
+    g.vehicles({v});
+    ground.Write(g);
+  };
+  auto publish_air = [&](uint64_t k) {
+    msg::AirState a;
+    a.stamp(stamp(k));
+    msg::DroneState d;
+    d.actor(6);
+    d.blueprint("drone.flyer");
+    d.transform(MakePose(0, 10, 5));
+    a.drones({d});
+    air.Write(a);
+  };
+  auto tick = [](uint64_t k) {
+    msg::Tick t;
+    t.run(1);
+    t.frame(k);
+    t.sim_time(0.05 * static_cast<double>(k));
+    t.dt(0.05);
+    return t;
+  };
+  msg::Tick first = tick(1);
+  msg::CommandBody b = SpawnBody("sensor.other.imu", MakePose(0, 0, 1));
+  b.spawn_actor().actor(100);
+  b.spawn_actor().owner("sensors");
+  msg::Command c;
+  c.body(b);
+  first.commands({c});
+  publish_ground(1);
+  publish_air(1);
+  service.Step(first);
+  ASSERT_EQ(service.world()->size(), 1u);
+  const uint64_t hash = service.StateHash();
+  auto faults = [&](const std::string& missing) {
+    try {
+      service.Step(tick(2));
+      ADD_FAILURE() << "frame 2 stepped without the " << missing << " of frame 2";
+    } catch (const MissingInput& e) {
+      EXPECT_NE(std::string(e.what()).find("no " + missing + " of frame 2"), std::string::npos) << e.what();
+    }
+    EXPECT_EQ(service.StateHash(), hash) << "the failed step changed the state";
+  };
+  faults("GroundState");
+  publish_ground(2);
+  faults("AirState");
+  // With both inputs there, the frame steps.
+  publish_air(2);
+  EXPECT_NO_THROW(service.Step(tick(2)));
+}
 
 // A custom prop (an asset the render service imported and declared as custom.<name> with
 // its bounding box and class) is seen by the ray sensors: a semantic LiDAR's rays hit its

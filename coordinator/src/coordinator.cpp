@@ -21,8 +21,10 @@
 #include "lockstep/runtime/log.h"
 #include "lockstep/runtime/messages.h"
 #include "lockstep/runtime/tick_log.h"
+#include "actor_roster.h"
 #include "map_source.h"
 #include "playback.h"
+#include "scenario.h"
 #include "weather_defaults.h"
 
 namespace lockstep {
@@ -71,10 +73,9 @@ struct Coordinator::Impl {
   size_t map_traffic_lights = 0;
   std::string failed_service;
   std::string failure_reason;
-  size_t next_scheduled = 0;                  // index into config.scenario
+  Scenario scenario{config.scenario};         // the config's scheduled commands (scenario.cpp)
   Playback playback{OpenRecordedLog, RecordedLogPath};  // CARLA's replay_file: the log's actors follow it
   uint64_t playback_sequence = 0;
-  std::map<std::string, uint32_t> aliases;    // scenario actor names -> actor ids
 
   // Statistics.
   std::deque<Clock::time_point> recent_done;
@@ -184,9 +185,7 @@ struct Coordinator::Impl {
 
   // The scenario has commands for `for_frame`: its tick starts on the main loop, which
   // may wait for an owner's spawn check.
-  bool ScheduledDue(uint64_t for_frame) const {
-    return next_scheduled < config.scenario.size() && config.scenario[next_scheduled].frame <= for_frame;
-  }
+  bool ScheduledDue(uint64_t for_frame) const { return scenario.Due(for_frame); }
 
   void FlushFromCallback() {
     std::unique_lock<std::mutex> lock(mu);
@@ -451,8 +450,7 @@ struct Coordinator::Impl {
     RegisterMapActors();
     log.clear();
     ticks_requested = 0;
-    next_scheduled = 0;
-    aliases.clear();
+    scenario.Restart();
     playback.NewRun();
     PublishWorld();
     PublishMap();
@@ -585,31 +583,9 @@ struct Coordinator::Impl {
   }
 
   // lockstep/actors: the spawns of the live actors, re-published when a tick changes them.
-  msg::ActorList actor_list;
+  ActorRoster roster;
   void ListActors(const msg::Tick& t) {
-    bool changed = actor_list.run() != t.run() || actor_list.frame() == 0;
-    if (actor_list.run() != t.run()) actor_list.actors().clear();
-    auto& list = actor_list.actors();
-    for (const auto& c : t.commands()) {
-      const auto& b = c.body();
-      if (b._d() == msg::CommandKind::CMD_SPAWN_ACTOR) {
-        msg::ActorSpawned a;
-        a.spawn(b.spawn_actor());
-        a.frame(t.frame());
-        list.push_back(std::move(a));
-        changed = true;
-      } else if (b._d() == msg::CommandKind::CMD_DESTROY_ACTOR) {
-        // Only the actor (CARLA): what was attached to it stays listed, detached where it was
-        // (its spawn still names the parent, which is gone: clients read that as detached).
-        const uint32_t gone = b.destroy_actor().actor();
-        std::erase_if(list, [&](const msg::ActorSpawned& a) { return a.spawn().actor() == gone; });
-        changed = true;
-      }
-    }
-    if (!changed) return;
-    actor_list.run(t.run());
-    actor_list.frame(t.frame());
-    Post(actors_writer, actor_list);
+    if (auto list = roster.Apply(t)) Post(actors_writer, std::move(*list));
   }
 
   // Opens the barrier for open_tick and sends it. A re-send after a fault has the same
@@ -621,33 +597,12 @@ struct Coordinator::Impl {
     Post(tick_writer, open_tick);
   }
 
-  // The scenario's commands for `frame`, validated like a client's, with aliases resolved.
+  // The scenario's commands for `for_frame`, validated like a client's, aliases resolved.
   std::vector<msg::Command> Scheduled(uint64_t for_frame) {
-    const auto& steps = config.scenario;
-    while (next_scheduled < steps.size() && steps[next_scheduled].frame < for_frame) ++next_scheduled;  // after a reset
-    while (next_scheduled < steps.size() && steps[next_scheduled].frame == for_frame) {
-      const ScheduledCommand& step = steps[next_scheduled++];
-      msg::Command c = step.command;
-      if (!step.actor_alias.empty()) {
-        auto it = aliases.find(step.actor_alias);
-        if (it == aliases.end()) {
-          spdlog::error("scenario step {} at frame {}: no actor named '{}'", c.sequence_number(), for_frame, step.actor_alias);
-          continue;
-        }
-        if (c.body()._d() == msg::CommandKind::CMD_DRONE) c.body().drone().actor(it->second);
-        if (c.body()._d() == msg::CommandKind::CMD_TRAFFIC_MANAGER) c.body().traffic_manager().actor(it->second);
-        if (c.body()._d() == msg::CommandKind::CMD_WALKER_AI) c.body().walker_ai().actor(it->second);
-        if (c.body()._d() == msg::CommandKind::CMD_SPAWN_ACTOR) c.body().spawn_actor().parent(it->second);
-      }
+    scenario.Submit(for_frame, [&](const msg::Command& c) {
       SyncLibrary();
-      msg::CommandReply r = commands.Submit(c, run, for_frame, settings.synchronous_mode(),
-                                            [this](const msg::SpawnActor& s) { return AskOwner(s); });
-      if (!r.accepted()) {
-        spdlog::error("scenario step {} at frame {} rejected: {}", c.sequence_number(), for_frame, r.reason().to_string());
-        continue;
-      }
-      if (!step.alias.empty()) aliases[step.alias] = r.actor();
-    }
+      return commands.Submit(c, run, for_frame, settings.synchronous_mode(), [this](const msg::SpawnActor& s) { return AskOwner(s); });
+    });
     return commands.TakePending();
   }
 

@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "lockstep/map/scene_mesh.h"
+#include "lockstep/runtime/command_builders.h"
 #include "lockstep/runtime/error.h"
 #include "lockstep/runtime/hash.h"
 #include "lockstep/runtime/wire_geometry.h"
@@ -423,13 +424,7 @@ uint64_t AirService::StateHash() const {
 }
 
 void AirService::Fail(const msg::FrameStamp& stamp, uint32_t actor, const std::string& why) {
-  msg::SimEvent e;
-  e.stamp(stamp);
-  e.service(name_);
-  e.kind(msg::EventKind::EVENT_COMMAND_FAILED);
-  e.actor(actor);
-  e.message(why.substr(0, 511));
-  pending_events_.push_back(e);
+  pending_events_.push_back(CommandFailedEvent(name_, actor, why, stamp));
   spdlog::warn("actor {}: {}", actor, why);
 }
 

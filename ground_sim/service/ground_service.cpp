@@ -4,6 +4,7 @@
 #include <chrono>
 
 #include "lockstep/map/scene.h"
+#include "lockstep/runtime/command_builders.h"
 #include "lockstep/runtime/error.h"
 #include "lockstep/runtime/log.h"
 #include "wire.h"
@@ -166,12 +167,7 @@ void GroundService::RestoreState(const std::vector<uint8_t>& state) {
 }
 
 void GroundService::Fail(uint32_t actor, const std::string& why) {
-  msg::SimEvent e;
-  e.service(name_);
-  e.kind(msg::EventKind::EVENT_COMMAND_FAILED);
-  e.actor(actor);
-  e.message(why.substr(0, 511));
-  pending_events_.push_back(e);
+  pending_events_.push_back(CommandFailedEvent(name_, actor, why));  // stamped when published
   if (!replaying()) spdlog::warn("actor {}: {}", actor, why);
 }
 

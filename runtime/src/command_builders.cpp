@@ -100,6 +100,16 @@ msg::CommandBody RecorderBody(msg::RecorderAction action, const std::string& nam
   return b;
 }
 
+msg::SimEvent CommandFailedEvent(const std::string& service, uint32_t actor, const std::string& why, const msg::FrameStamp& stamp) {
+  msg::SimEvent e;
+  e.stamp(stamp);
+  e.service(service);
+  e.kind(msg::EventKind::EVENT_COMMAND_FAILED);
+  e.actor(actor);
+  e.message(why.substr(0, 511));
+  return e;
+}
+
 const char* RunStateName(msg::RunState state) {
   switch (state) {
     case msg::RunState::RUN_WAITING_FOR_SERVICES: return "waiting for services";

@@ -5,6 +5,7 @@
 
 #include "lockstep/map/scene_mesh.h"
 #include "lockstep/runtime/blueprint_builder.h"
+#include "lockstep/runtime/command_builders.h"
 #include "lockstep/runtime/error.h"
 #include "lockstep/runtime/log.h"
 #include "frame_actors.h"
@@ -236,13 +237,7 @@ void SensorsService::RestoreState(const std::vector<uint8_t>& state) {
 }
 
 void SensorsService::Fail(const msg::FrameStamp& stamp, uint32_t actor, const std::string& why) {
-  msg::SimEvent e;
-  e.stamp(stamp);
-  e.service(name_);
-  e.kind(msg::EventKind::EVENT_COMMAND_FAILED);
-  e.actor(actor);
-  e.message(why.substr(0, 511));
-  if (!replaying()) event_writer_.Write(e);
+  if (!replaying()) event_writer_.Write(CommandFailedEvent(name_, actor, why, stamp));
   spdlog::warn("actor {}: {}", actor, why);
 }
 

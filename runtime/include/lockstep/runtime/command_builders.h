@@ -1,6 +1,6 @@
 #pragma once
 // Small builders for the wire types clients send most: poses, spawn requests and the
-// bodies of one-actor commands.
+// bodies of one-actor commands; and the services' command-failed event.
 #include <string>
 #include <utility>
 #include <vector>
@@ -27,6 +27,11 @@ msg::CommandBody TrafficLightBody(uint32_t actor, msg::TrafficLightColor state, 
 // The recorder's and replayer's commands: name = log file (start_recorder, replay_file),
 // flag by action (additional_data, keep_actors, ...).
 msg::CommandBody RecorderBody(msg::RecorderAction action, const std::string& name = "", bool flag = false);
+
+// A service's SimEvent EVENT_COMMAND_FAILED: an accepted command it could not apply to
+// `actor`, the reason cut to the wire's 511 characters; stamped with the frame's stamp.
+msg::SimEvent CommandFailedEvent(const std::string& service, uint32_t actor, const std::string& why,
+                                 const msg::FrameStamp& stamp = {});
 
 // Human-readable run state ("running", "faulted", ...).
 const char* RunStateName(msg::RunState state);

@@ -1,7 +1,8 @@
-// docs/topics.md's topic table against the topics the code declares
-// (runtime/include/lockstep/runtime/*.h: Topic<msg::T> kX{"name", QosKind::kFamily} and
-// the per-camera topic names): every declared topic has its row with the declared type and
-// QoS family, every row names a declared topic, and no doc carries merge-conflict markers.
+// The docs against the topics the code declares (runtime/include/lockstep/runtime/*.h:
+// Topic<msg::T> kX{"name", QosKind::kFamily} and the per-camera topic names):
+// docs/topics.md's table has every declared topic with its type and QoS family and no other;
+// docs/architecture.md's process table names only declared types and a writer for each;
+// no doc carries merge-conflict markers.
 #include <gtest/gtest.h>
 
 #include <cctype>
@@ -9,8 +10,10 @@
 #include <fstream>
 #include <map>
 #include <regex>
+#include <set>
 #include <sstream>
 #include <string>
+#include <vector>
 
 namespace {
 
@@ -55,6 +58,9 @@ std::map<std::string, Declared> DeclaredTopics() {
   return out;
 }
 
+// The message types of the per-camera topics (render/service: Image, or LargeImage over its bound).
+const char* const kPerCameraTypes[] = {"Image", "LargeImage"};
+
 // The rows of the "## Topics" table: name -> (type, family).
 std::map<std::string, Declared> DocumentedTopics() {
   std::map<std::string, Declared> out;
@@ -89,6 +95,58 @@ TEST(TopicsDoc, TheTableListsEveryDeclaredTopicWithItsTypeAndFamily) {
   }
   for (const auto& [name, d] : documented) {
     EXPECT_TRUE(declared.count(name)) << "docs/topics.md lists " << name << ", which no header declares";
+  }
+}
+
+// Backticked CamelCase names in a table cell ("`Tick`, `GroundState` of frame k-1").
+std::vector<std::string> TypesIn(const std::string& cell) {
+  std::vector<std::string> out;
+  const std::regex name("`([A-Z][A-Za-z0-9]+)`");
+  for (std::sregex_iterator it(cell.begin(), cell.end(), name), end; it != end; ++it) out.push_back((*it)[1]);
+  return out;
+}
+
+TEST(TopicsDoc, TheProcessTableNamesDeclaredTypesAndAWriterForEach) {
+  std::set<std::string> declared(std::begin(kPerCameraTypes), std::end(kPerCameraTypes));
+  for (const auto& [name, d] : DeclaredTopics()) {
+    if (!d.type.empty()) declared.insert(d.type);
+  }
+  std::istringstream in(Read(kSource / "docs/architecture.md"));
+  std::string line;
+  bool in_section = false;
+  std::set<std::string> written;
+  std::string below;  // the paragraph under the table
+  size_t rows = 0;
+  while (std::getline(in, line)) {
+    if (line.rfind("## ", 0) == 0) in_section = line == "## Processes";
+    if (!in_section) continue;
+    if (line.rfind("| ", 0) == 0 && line.find("`") != std::string::npos) {
+      // | process | owns today | publishes | reads |
+      std::vector<std::string> cells;
+      std::string cell;
+      std::istringstream row(line.substr(1));
+      while (std::getline(row, cell, '|')) cells.push_back(cell);
+      ASSERT_GE(cells.size(), 4u) << line;
+      ++rows;
+      for (size_t c : {size_t{2}, size_t{3}}) {
+        for (const auto& t : TypesIn(cells[c])) {
+          EXPECT_TRUE(declared.count(t)) << "docs/architecture.md's process table names `" << t << "`, which no topic carries";
+          if (c == 2) written.insert(t);
+        }
+      }
+    } else if (line.rfind("Every service also writes", 0) == 0) {
+      below = line;
+    } else if (!below.empty() && !line.empty()) {
+      below += " " + line;
+    } else if (!below.empty()) {
+      // What every service writes, below the table: up to "; it reads".
+      for (const auto& t : TypesIn(below.substr(0, below.find("; it reads")))) written.insert(t);
+      below.clear();
+    }
+  }
+  ASSERT_GT(rows, 5u) << "the process table was not found";
+  for (const auto& t : declared) {
+    EXPECT_TRUE(written.count(t)) << "no process of docs/architecture.md's table (or the line below it) publishes `" << t << "`";
   }
 }
 

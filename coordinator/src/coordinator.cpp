@@ -24,6 +24,7 @@
 #include "actor_roster.h"
 #include "map_source.h"
 #include "playback.h"
+#include "run_status.h"
 #include "scenario.h"
 #include "weather_defaults.h"
 
@@ -330,42 +331,20 @@ struct Coordinator::Impl {
   }
 
   void PublishStatus(Clock::time_point now) {
-    msg::RunStatus s;
-    s.run(run);
-    s.state(state);
-    s.frame(frame);
-    s.sim_time(sim_time);
-    while (!recent_done.empty() && now - recent_done.front() > std::chrono::seconds(1)) recent_done.pop_front();
-    double rate = 0;
-    if (recent_done.size() >= 2) {
-      const double span = std::chrono::duration<double>(recent_done.back() - recent_done.front()).count();
-      if (span > 0) rate = (recent_done.size() - 1) / span;
-    }
-    s.tick_rate_hz(rate);
-    s.real_time_factor(rate * settings.fixed_delta_seconds());
-    std::vector<msg::MemberStatus> list;
-    for (const auto& [name, m] : members.members()) {
-      msg::MemberStatus ms;
-      ms.service(name);
-      ms.kind(m.kind);
-      ms.alive(m.alive);
-      ms.required(m.required);
-      ms.last_frame(m.last_frame);
-      ms.last_step_wall_us(m.last_step_us);
-      ms.pid(m.pid);
-      ms.failure(m.failure.substr(0, 255));
-      if (m.run == run) ms.divergence(m.divergence.substr(0, 255));
-      list.push_back(ms);
-    }
-    s.members(list);
-    s.diverged(Diverged(false));
-    s.failed_service(failed_service);
+    RunFacts f;
+    f.run = run;
+    f.state = state;
+    f.frame = frame;
+    f.sim_time = sim_time;
+    f.tick_rate_hz = TickRate(&recent_done, now);
+    f.fixed_delta_seconds = settings.fixed_delta_seconds();
+    f.diverged = Diverged(false);
+    f.failed_service = failed_service;
     // A fault names who waits for the failed service's replacement (membership.cpp).
-    s.reason((state == RunState::RUN_FAULTED && barrier.open()
-                  ? members.FaultReason(failure_reason, failed_service, run, barrier.frame())
-                  : failure_reason)
-                 .substr(0, 511));
-    Post(status_writer, s);
+    f.reason = state == RunState::RUN_FAULTED && barrier.open()
+                   ? members.FaultReason(failure_reason, failed_service, run, barrier.frame())
+                   : failure_reason;
+    Post(status_writer, MakeRunStatus(f, members));
     last_status = now;
     status_dirty = false;
   }

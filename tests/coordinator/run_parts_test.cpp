@@ -1,9 +1,13 @@
 // The coordinator's run parts as plain logic (coordinator/src): the actor roster it
-// publishes on lockstep/actors and the launch config's scenario.
+// publishes on lockstep/actors, the launch config's scenario and the run status.
 #include <gtest/gtest.h>
+
+#include <chrono>
+#include <deque>
 
 #include "actor_roster.h"
 #include "lockstep/runtime/command_builders.h"
+#include "run_status.h"
 #include "scenario.h"
 
 namespace lockstep {
@@ -103,6 +107,39 @@ TEST(Scenario, AliasesNameTheSpawnedActorsAndARestartBeginsAgain) {
   submitted.clear();
   scenario.Submit(2, submit);  // frame 1 is past (a reset at frame 2): skipped, so 'car' names nothing
   EXPECT_TRUE(submitted.empty());
+}
+
+TEST(RunStatus, TheTickRateCountsTheLastSecondAndTheStatusListsEveryMember) {
+  using Clock = std::chrono::steady_clock;
+  const Clock::time_point now = Clock::now();
+  std::deque<Clock::time_point> done{now - std::chrono::milliseconds(1500), now - std::chrono::milliseconds(900),
+                                     now - std::chrono::milliseconds(400), now};
+  EXPECT_NEAR(TickRate(&done, now), 2 / 0.9, 1e-9) << "2 intervals over the 0.9 s of the last second";
+  EXPECT_EQ(done.size(), 3u) << "the completion older than a second is dropped";
+  std::deque<Clock::time_point> one{now};
+  EXPECT_EQ(TickRate(&one, now), 0.0);
+
+  Membership members({"ground_sim", "air_sim"}, std::chrono::milliseconds(600));
+  RunFacts f;
+  f.run = 3;
+  f.state = msg::RunState::RUN_FAULTED;
+  f.frame = 40;
+  f.sim_time = 2.0;
+  f.tick_rate_hz = 20;
+  f.fixed_delta_seconds = 0.05;
+  f.failed_service = "air_sim";
+  f.reason = std::string(600, 'x');
+  const msg::RunStatus s = MakeRunStatus(f, members);
+  EXPECT_EQ(s.run(), 3u);
+  EXPECT_EQ(s.state(), msg::RunState::RUN_FAULTED);
+  EXPECT_EQ(s.frame(), 40u);
+  EXPECT_DOUBLE_EQ(s.real_time_factor(), 1.0);
+  EXPECT_EQ(s.failed_service().to_string(), "air_sim");
+  EXPECT_EQ(s.reason().to_string().size(), 511u) << "cut to the wire's bound";
+  ASSERT_EQ(s.members().size(), 2u);
+  EXPECT_EQ(s.members()[0].service().to_string(), "air_sim");  // by name
+  EXPECT_TRUE(s.members()[0].required());
+  EXPECT_FALSE(s.members()[0].alive());
 }
 
 }  // namespace

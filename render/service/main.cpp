@@ -1,22 +1,18 @@
 // lockstep_render: the camera service (headless OpenGL through EGL).
-#include <cstdio>
-#include <stdexcept>
+#include <CLI/CLI.hpp>
 
-#include "render_service.h"
 #include "lockstep/runtime/service_main.h"
+#include "render_service.h"
 
 int main(int argc, char** argv) {
   lockstep::RenderOptions options;
-  try {
-    options = lockstep::ParseRenderOptions(&argc, argv);
-  } catch (const std::invalid_argument& e) {
-    std::fprintf(stderr, "lockstep_render: %s\n", e.what());
-    return 2;
-  }
-  return lockstep::RunServiceMain(argc, argv, "render", true, [&](lockstep::ServiceContext& ctx) {
-    lockstep::RenderOptions o = options;
-    // A relative save folder lives under the run's output folder.
-    if (!o.save_dir.empty() && o.save_dir[0] != '/' && !ctx.config.output_dir.empty()) o.save_dir = ctx.config.output_dir + "/" + o.save_dir;
-    return std::make_unique<lockstep::RenderService>(*ctx.bus, ctx.name, o);
-  });
+  return lockstep::RunServiceMain(
+      argc, argv, "render", true,
+      [&](lockstep::ServiceContext& ctx) {
+        lockstep::RenderOptions o = options;
+        // A relative save folder lives under the run's output folder.
+        if (!o.save_dir.empty() && o.save_dir[0] != '/' && !ctx.config.output_dir.empty()) o.save_dir = ctx.config.output_dir + "/" + o.save_dir;
+        return std::make_unique<lockstep::RenderService>(*ctx.bus, ctx.name, o);
+      },
+      [&](CLI::App& app) { lockstep::AddRenderOptions(app, options); });
 }

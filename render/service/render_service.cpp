@@ -1,5 +1,6 @@
 #include "render_service.h"
 
+#include <CLI/CLI.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
@@ -87,6 +88,26 @@ std::optional<std::array<std::uint8_t, 3>> ParseRgb(const std::string& s) {
   return c;
 }
 
+// A camera attribute as blueprint.idl declares it, with CARLA's default text exactly.
+msg::AttributeDeclaration Declare(const render::AttributeSpec& a) {
+  msg::AttributeDeclaration d;
+  switch (a.type) {
+    case render::AttributeType::kBool: d = blueprint::Bool(a.id, a.def == "true"); break;
+    case render::AttributeType::kInt: d = blueprint::Int(a.id, std::stoll(a.def), a.min, a.max); break;
+    case render::AttributeType::kFloat: d = blueprint::Float(a.id, std::stod(a.def), a.min, a.max); break;
+    case render::AttributeType::kString: return blueprint::String(a.id, a.def, a.choices, !a.choices.empty());
+  }
+  d.default_value(a.def);
+  return d;
+}
+
+render::Weather ToWeather(const msg::WeatherParameters& w) {
+  return render::Weather{w.cloudiness(), w.precipitation(), w.precipitation_deposits(), w.wind_intensity(),
+                         w.sun_azimuth_angle(), w.sun_altitude_angle(), w.fog_density(), w.fog_distance(), w.fog_falloff(),
+                         w.wetness(), w.scattering_intensity(), w.mie_scattering_scale(), w.rayleigh_scattering_scale(),
+                         w.dust_storm()};
+}
+
 double Attr(const std::map<std::string, std::string>& a, const char* key, double def) {
   auto it = a.find(key);
   if (it == a.end()) return def;
@@ -99,82 +120,72 @@ double Attr(const std::map<std::string, std::string>& a, const char* key, double
 
 }  // namespace
 
-struct RenderService::CameraRecord {
-  uint32_t id = 0;
-  render::CameraSettings settings;
-  uint32_t parent = 0;
-  render::Pose relative;
-  std::string role;
-  std::string topic;
-  Writer<msg::Image> writer;             // images within msg::Image's bound ...
-  Writer<msg::LargeImage> large_writer;  // ... or over it (render::kMaxImageBytes): lockstep/sensor/large_image/<id>
-  bool large = false;
-  double last_capture = -1e300;
-  std::optional<render::Pose> last_pose;
-  std::optional<render::Pose> world_pose;  // at the last frame drawn that found its parent
-  std::unique_ptr<render::DvsSensor> dvs;
-  render::AutoExposure exposure;  // colour cameras: adapts from image to image (histogram mode)
-  double exposure_dt = 0;         // s of simulated time since the camera's previous image
-  msg::Image image;  // reused: its buffer keeps its capacity from frame to frame
-  msg::LargeImage large_image;
-};
-
-RenderOptions ParseRenderOptions(int* argc, char** argv) {
-  RenderOptions o;
-  int out = 1;
-  for (int i = 1; i < *argc; ++i) {
-    const std::string a = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= *argc) throw std::invalid_argument("render option " + a + " needs a value");
-      return argv[++i];
-    };
-    if (a == "--device") {
-      o.device = value();
-      render::ParseDevicePreference(o.device);
-    } else if (a == "--claim-unowned") {
-      o.claim_unowned = true;
-    } else if (a == "--save-dir") {
-      o.save_dir = value();
-    } else if (a == "--save-every") {
-      const std::string v = value();
+render::AssetSpec ParseAssetOption(const std::string& v) {
+  const auto eq = v.find('=');
+  if (eq == std::string::npos || eq == 0) throw std::invalid_argument("render option --asset '" + v + "': expected name=path[,class[,scale]]");
+  render::AssetSpec s;
+  s.name = v.substr(0, eq);
+  std::string rest = v.substr(eq + 1);
+  const auto c1 = rest.find(',');
+  s.path = rest.substr(0, c1);
+  if (c1 != std::string::npos) {
+    std::string cls = rest.substr(c1 + 1);
+    const auto c2 = cls.find(',');
+    if (c2 != std::string::npos) {
       try {
-        o.save_every = std::stoull(v);
+        s.scale = std::stod(cls.substr(c2 + 1));
       } catch (...) {
-        o.save_every = 0;
+        throw std::invalid_argument("render option --asset '" + v + "': bad scale");
       }
-      if (o.save_every == 0) throw std::invalid_argument("render option --save-every '" + v + "': expected a positive count");
-    } else if (a == "--asset") {
-      // name=path[,class[,scale]]
-      const std::string v = value();
-      const auto eq = v.find('=');
-      if (eq == std::string::npos || eq == 0) throw std::invalid_argument("render option --asset '" + v + "': expected name=path[,class[,scale]]");
-      render::AssetSpec s;
-      s.name = v.substr(0, eq);
-      std::string rest = v.substr(eq + 1);
-      const auto c1 = rest.find(',');
-      s.path = rest.substr(0, c1);
-      if (c1 != std::string::npos) {
-        std::string cls = rest.substr(c1 + 1);
-        const auto c2 = cls.find(',');
-        if (c2 != std::string::npos) {
-          try {
-            s.scale = std::stod(cls.substr(c2 + 1));
-          } catch (...) {
-            throw std::invalid_argument("render option --asset '" + v + "': bad scale");
-          }
-          cls = cls.substr(0, c2);
-        }
-        const int tag = render::ClassFromName(cls);
-        if (tag < 0) throw std::invalid_argument("render option --asset '" + v + "': unknown semantic class '" + cls + "'");
-        s.tag = static_cast<std::uint8_t>(tag);
-      }
-      o.assets.push_back(s);
-    } else {
-      argv[out++] = argv[i];
+      cls = cls.substr(0, c2);
     }
+    const int tag = render::ClassFromName(cls);
+    if (tag < 0) throw std::invalid_argument("render option --asset '" + v + "': unknown semantic class '" + cls + "'");
+    s.tag = static_cast<std::uint8_t>(tag);
   }
-  *argc = out;
-  return o;
+  return s;
+}
+
+void AddRenderOptions(CLI::App& app, RenderOptions& o) {
+  // A check that names the option and the value from a parser that throws.
+  auto checked = [](std::function<void(const std::string&)> parse, std::string what) {
+    return CLI::Validator(
+        [parse = std::move(parse)](std::string& v) -> std::string {
+          try {
+            parse(v);
+          } catch (const std::exception& e) {
+            return e.what();
+          }
+          return {};
+        },
+        std::move(what));
+  };
+  app.add_option("--device", o.device, "render device: auto (a GPU if there is one), gpu or cpu")
+      ->check(checked([](const std::string& v) { render::ParseDevicePreference(v); }, "auto|gpu|cpu"));
+  app.add_flag("--claim-unowned", o.claim_unowned, "also render cameras spawned with no owner named");
+  app.add_option("--save-dir", o.save_dir, "write a PNG of every image here (relative: under the run's output folder)");
+  app.add_option("--save-every", o.save_every, "frames between saved images")
+      ->check(checked(
+          [](const std::string& v) {
+            std::size_t used = 0;
+            unsigned long long n = 0;
+            try {
+              n = std::stoull(v, &used);
+            } catch (...) {
+              used = 0;
+            }
+            if (used == 0 || used != v.size() || n == 0 || v[0] == '-') {
+              throw std::invalid_argument("render option --save-every '" + v + "': expected a positive count");
+            }
+          },
+          "N > 0"));
+  app.add_option_function<std::vector<std::string>>(
+         "--asset",
+         [&o](const std::vector<std::string>& values) {
+           for (const auto& v : values) o.assets.push_back(ParseAssetOption(v));
+         },
+         "a custom prop blueprint custom.<name> from a mesh file (OBJ, glTF, FBX): name=path[,class[,scale]]")
+      ->check(checked([](const std::string& v) { ParseAssetOption(v); }, "name=path[,class[,scale]]"));
 }
 
 RenderService::RenderService(Bus& bus, std::string name, RenderOptions options)
@@ -183,8 +194,9 @@ RenderService::RenderService(Bus& bus, std::string name, RenderOptions options)
       options_(std::move(options)),
       event_writer_(bus, topics::kEvent),
       declarations_(bus),
-      ground_(bus, topics::kGroundState),
-      air_(bus, topics::kAirState),
+      // A replay reads the inputs of past frames: keep what the state topics keep.
+      ground_(bus, topics::kGroundState, static_cast<size_t>(QosHistoryDepth(QosKind::kState))),
+      air_(bus, topics::kAirState, static_cast<size_t>(QosHistoryDepth(QosKind::kState))),
       map_reader_(bus, topics::kMap, [this](const msg::MapData& m, const SampleInfo&) {
         {
           std::lock_guard<std::mutex> lock(map_mu_);
@@ -199,14 +211,7 @@ std::vector<msg::BlueprintDeclaration> RenderService::Blueprints() const {
   std::vector<msg::BlueprintDeclaration> out;
   for (const auto& bp : render::CameraBlueprints()) {
     std::vector<msg::AttributeDeclaration> attrs;
-    for (const auto& a : bp.attributes) {
-      switch (a.type) {
-        case 'b': attrs.push_back(blueprint::Bool(a.id, a.def == "true")); break;
-        case 'i': attrs.push_back(blueprint::Int(a.id, std::stoll(a.def), a.min, a.max)); break;
-        case 'f': attrs.push_back(blueprint::Float(a.id, std::stod(a.def), a.min, a.max)); break;
-        default: attrs.push_back(blueprint::String(a.id, a.def, a.choices, !a.choices.empty())); break;
-      }
-    }
+    for (const auto& a : bp.attributes) attrs.push_back(Declare(a));
     out.push_back(blueprint::Make(bp.id, msg::ActorKind::ACTOR_SENSOR, attrs));
   }
   for (const auto& asset : options_.assets) {
@@ -291,11 +296,6 @@ void RenderService::BeginRun(const msg::WorldInfo& world) {
   }
   LoadTown(world);
   world_ = world;
-  const auto& w = world.weather();
-  weather_ = render::Weather{w.cloudiness(), w.precipitation(), w.precipitation_deposits(), w.wind_intensity(),
-                             w.sun_azimuth_angle(), w.sun_altitude_angle(), w.fog_density(), w.fog_distance(), w.fog_falloff(),
-                             w.wetness(), w.scattering_intensity(), w.mie_scattering_scale(), w.rayleigh_scattering_scale(),
-                             w.dust_storm()};
   // Whose state to wait for: the required services that simulate vehicles or walkers
   // (GroundState) and drones (AirState), found by what they declare, not by their names.
   const auto required = RequiredServices(world);
@@ -306,10 +306,10 @@ void RenderService::BeginRun(const msg::WorldInfo& world) {
                  declarations_.AnyDeclares(msg::ActorKind::ACTOR_WALKER, required);
   wait_air_ = declarations_.AnyDeclares(msg::ActorKind::ACTOR_DRONE, required);
   spdlog::info("run {}: state from {}{}", world.run(), wait_ground_ ? "GroundState " : "", wait_air_ ? "AirState" : "");
-  spawned_.clear();
-  cameras_.clear();
-  previous_poses_.clear();
-  debug_.Clear();  // a new world: CARLA's persistent lines go with the old one
+  // A new world: no actors, no cameras; CARLA's persistent lines go with the old one.
+  state_ = render::RenderState{};
+  state_.weather = ToWeather(world.weather());
+  outputs_.clear();
 }
 
 // CARLA's CosmosControlSensor: each vehicle's box red, each walker's green, traffic light
@@ -360,10 +360,6 @@ void AddDebugDraw(render::DebugShapes& shapes, const msg::DebugDraw& d, uint64_t
   }
 }
 
-void RenderService::AddDebugShapes(const msg::DebugDraw& d, uint64_t first_frame, double issued) {
-  AddDebugDraw(debug_, d, first_frame, issued);
-}
-
 bool RenderService::Mine(const msg::SpawnActor& s) const {
   const std::string owner = s.owner().to_string();
   return owner == name_ || (owner.empty() && options_.claim_unowned);
@@ -386,80 +382,69 @@ void RenderService::Apply(const msg::Command& c, const msg::FrameStamp& stamp) {
   switch (b._d()) {
     case msg::CommandKind::CMD_SPAWN_ACTOR: {
       const auto& s = b.spawn_actor();
-      Spawned rec;
+      render::SpawnedActor rec;
       rec.blueprint = s.blueprint().to_string();
       for (const auto& a : s.attributes()) rec.attributes[a.key().to_string()] = a.value().to_string();
       rec.parent = s.parent();
       rec.transform = ToPose(s.transform());
-      spawned_[s.actor()] = rec;
-      if (!render::IsCameraBlueprint(rec.blueprint) || !Mine(s)) return;
-      auto cam = std::make_unique<CameraRecord>();
+      const render::RigCamera* cam = nullptr;
       try {
-        cam->settings = render::ParseCamera(rec.blueprint, rec.attributes);
+        cam = state_.Spawn(s.actor(), std::move(rec), Mine(s), world_.seed());
       } catch (const std::exception& e) {
         Fail(stamp, s.actor(), std::string("spawn failed: ") + e.what());
         return;
       }
-      cam->id = s.actor();
-      cam->parent = s.parent();
-      cam->relative = rec.transform;
-      cam->exposure = render::AutoExposure(cam->settings.exposure);
-      cam->role = rec.attributes.count("role_name") ? rec.attributes["role_name"] : "";
-      cam->large = cam->settings.kind != ImageKind::kDvs &&
-                   static_cast<std::size_t>(cam->settings.camera.width) * cam->settings.camera.height *
-                           render::BytesPerPixel(cam->settings.kind) > render::kMaxImageBytes;
-      if (cam->large) {
-        cam->topic = topics::LargeImageTopicName(s.actor());
-        cam->large_writer = Writer<msg::LargeImage>(bus_, Topic<msg::LargeImage>{cam->topic.c_str(), QosKind::kLargeImage});
-      } else {
-        cam->topic = topics::ImageTopicName(s.actor());
-        cam->writer = Writer<msg::Image>(bus_, Topic<msg::Image>{cam->topic.c_str(), QosKind::kImage});
-      }
-      if (cam->settings.kind == ImageKind::kDvs) {
-        cam->dvs = std::make_unique<render::DvsSensor>(cam->settings.dvs, cam->settings.camera.width, cam->settings.camera.height,
-                                                       world_.seed() ^ s.actor());
-      }
-      spdlog::info("camera {} ({}, {}x{}, fov {}) on {} publishes on {}", s.actor(), rec.blueprint, cam->settings.camera.width,
+      if (!cam) return;
+      OpenOutput(*cam);
+      spdlog::info("camera {} ({}, {}x{}, fov {}) on {} publishes on {}", s.actor(), cam->blueprint, cam->settings.camera.width,
                    cam->settings.camera.height, cam->settings.camera.fov_deg, s.parent() ? std::to_string(s.parent()) : "the world",
-                   cam->topic);
-      cameras_[s.actor()] = std::move(cam);
+                   outputs_.at(s.actor()).topic);
       return;
     }
     case msg::CommandKind::CMD_DESTROY_ACTOR: {
       const uint32_t id = b.destroy_actor().actor();
-      spawned_.erase(id);
-      cameras_.erase(id);
-      // CARLA destroys only the actor; Unreal detaches its cameras keeping their world
-      // transform: they stay and draw from where they were.
-      for (auto& [cid, cam] : cameras_) {
-        if (cam->parent != id) continue;
-        cam->parent = 0;
-        if (cam->world_pose) cam->relative = *cam->world_pose;
-        if (auto r = spawned_.find(cid); r != spawned_.end()) r->second.parent = 0, r->second.transform = cam->relative;
-      }
+      state_.Destroy(id);
+      outputs_.erase(id);
       return;
     }
-    case msg::CommandKind::CMD_SET_TRANSFORM: {
-      const uint32_t id = b.set_transform().actor();
-      auto it = spawned_.find(id);
-      if (it != spawned_.end()) it->second.transform = ToPose(b.set_transform().transform());
-      auto cam = cameras_.find(id);
-      if (cam != cameras_.end()) cam->second->relative = ToPose(b.set_transform().transform());
+    case msg::CommandKind::CMD_SET_TRANSFORM:
+      state_.SetTransform(b.set_transform().actor(), ToPose(b.set_transform().transform()));
       return;
-    }
-    case msg::CommandKind::CMD_SET_WEATHER: {
-      const auto& w = b.weather();
-      weather_ = render::Weather{w.cloudiness(), w.precipitation(), w.precipitation_deposits(), w.wind_intensity(),
-                                 w.sun_azimuth_angle(), w.sun_altitude_angle(), w.fog_density(), w.fog_distance(), w.fog_falloff(),
-                                 w.wetness(), w.scattering_intensity(), w.mie_scattering_scale(), w.rayleigh_scattering_scale(),
-                                 w.dust_storm()};
-      return;
-    }
+    case msg::CommandKind::CMD_SET_WEATHER: state_.weather = ToWeather(b.weather()); return;
     default: return;
   }
 }
 
-std::string RenderService::ModelFor(uint32_t id, const Spawned& s, const render::Vec3& he) {
+// The camera's topic and writer: lockstep/sensor/image/<id>, or large_image/<id> for images
+// over msg::Image's bound.
+void RenderService::OpenOutput(const render::RigCamera& cam) {
+  CameraOutput& out = outputs_[cam.id] = CameraOutput{};
+  out.large = cam.settings.kind != ImageKind::kDvs && static_cast<std::size_t>(cam.settings.camera.width) * cam.settings.camera.height *
+                                                          render::BytesPerPixel(cam.settings.kind) > render::kMaxImageBytes;
+  if (out.large) {
+    out.topic = topics::LargeImageTopicName(cam.id);
+    out.large_writer = Writer<msg::LargeImage>(bus_, Topic<msg::LargeImage>{out.topic.c_str(), QosKind::kLargeImage});
+  } else {
+    out.topic = topics::ImageTopicName(cam.id);
+    out.writer = Writer<msg::Image>(bus_, Topic<msg::Image>{out.topic.c_str(), QosKind::kImage});
+  }
+}
+
+std::vector<uint8_t> RenderService::SaveState() const { return state_.Save(); }
+
+// A replacement process takes over the state of the one it replaces (after BeginRun of the
+// same run): the rig's cameras publish on their topics again.
+void RenderService::RestoreState(const std::vector<uint8_t>& bytes) {
+  try {
+    state_.Restore(bytes);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(std::string("render: ") + e.what());
+  }
+  outputs_.clear();
+  for (const auto& [id, cam] : state_.cameras) OpenOutput(cam);
+}
+
+std::string RenderService::ModelFor(const render::SpawnedActor& s, const render::Vec3& he) {
   char ext[64];
   std::snprintf(ext, sizeof ext, "%.3f,%.3f,%.3f", he.x(), he.y(), he.z());
   std::string key;
@@ -486,26 +471,25 @@ std::string RenderService::ModelFor(uint32_t id, const Spawned& s, const render:
   } else {
     key = bp;  // custom.<name>
   }
-  (void)id;
   return key;
 }
 
 render::WorldView RenderService::BuildWorld(const msg::GroundState* ground, const msg::AirState* air, double sim_time,
                                             std::map<uint32_t, render::Pose>* poses, std::map<uint32_t, render::Pose>* mounts) {
   render::WorldView w;
-  w.weather = weather_;
+  w.weather = state_.weather;
   auto add = [&](uint32_t id, const std::string& blueprint, const render::Pose& pose, const render::Vec3& he, bool mount_at_bottom,
                  uint32_t light_state = 0) {
     (*poses)[id] = pose;
     (*mounts)[id] = mount_at_bottom ? pose * render::Pose{render::Vec3(0, 0, -he.z()), render::Quat::Identity()} : pose;
-    auto it = spawned_.find(id);
-    Spawned s = it != spawned_.end() ? it->second : Spawned{};
+    auto it = state_.spawned.find(id);
+    render::SpawnedActor s = it != state_.spawned.end() ? it->second : render::SpawnedActor{};
     if (s.blueprint.empty()) s.blueprint = blueprint;
     render::ActorDraw a;
     a.id = id;
-    a.model = ModelFor(id, s, he);
+    a.model = ModelFor(s, he);
     a.pose = pose;
-    if (auto p = previous_poses_.find(id); p != previous_poses_.end()) a.previous_pose = p->second;
+    if (auto p = state_.previous_poses.find(id); p != state_.previous_poses.end()) a.previous_pose = p->second;
     auto color = s.attributes.find("color");
     auto rgb = color != s.attributes.end() ? ParseRgb(color->second) : std::nullopt;
     a.paint = rgb ? *rgb : render::DefaultPaint(id);
@@ -547,7 +531,7 @@ render::WorldView RenderService::BuildWorld(const msg::GroundState* ground, cons
     }
   }
   // Custom props: placed by their spawn transform (relative to a parent if any).
-  for (const auto& [id, s] : spawned_) {
+  for (const auto& [id, s] : state_.spawned) {
     if (s.blueprint.rfind("custom.", 0) != 0 || !renderer_->HasModel(s.blueprint)) continue;
     render::Pose pose = s.transform;
     if (s.parent) {
@@ -562,7 +546,7 @@ render::WorldView RenderService::BuildWorld(const msg::GroundState* ground, cons
     a.model = s.blueprint;
     a.pose = pose;
     a.cull_faces = false;
-    if (auto p = previous_poses_.find(id); p != previous_poses_.end()) a.previous_pose = p->second;
+    if (auto p = state_.previous_poses.find(id); p != state_.previous_poses.end()) a.previous_pose = p->second;
     w.actors.push_back(a);
   }
   return w;
@@ -575,12 +559,12 @@ void RenderService::Step(const msg::Tick& tick) {
   tick_stamp.sim_time(tick.sim_time());
   for (const auto& c : tick.commands()) {
     if (c.body()._d() == msg::CommandKind::CMD_DEBUG_DRAW) {
-      AddDebugShapes(c.body().debug_draw(), tick.frame(), tick.sim_time() - tick.dt());
+      AddDebugDraw(state_.debug, c.body().debug_draw(), tick.frame(), tick.sim_time() - tick.dt());
     } else {
       Apply(c, tick_stamp);
     }
   }
-  if (replaying() || cameras_.empty() || world_.settings().no_rendering_mode()) return;
+  if (state_.cameras.empty() || world_.settings().no_rendering_mode()) return;
   // The frame whose state the images show: this tick's (strict) or the previous (pipelined).
   const uint64_t k = PerceptionFrame(world_.settings().perception_mode(), tick.frame());
   if (k == 0) return;
@@ -589,80 +573,56 @@ void RenderService::Step(const msg::Tick& tick) {
   stamp.frame(k);
   stamp.sim_time(tick.sim_time() - static_cast<double>(tick.frame() - k) * tick.dt());
   const auto timeout = std::chrono::milliseconds(static_cast<int64_t>(options_.input_timeout_s * 1000));
+  // A producer being replaced holds the wait (AwaitInput): no cascade of failures. A replay
+  // reads the inputs of past frames, which the state topics keep.
+  auto await = [&](auto& buffer) {
+    return AwaitInput([&](std::chrono::milliseconds slice) { return buffer.WaitFor(tick.run(), k, slice); }, timeout);
+  };
   std::optional<msg::GroundState> ground;
   std::optional<msg::AirState> air;
-  if (wait_ground_ && !(ground = ground_.WaitFor(tick.run(), k, timeout))) {
+  if (wait_ground_ && !(ground = await(ground_))) {
     throw InputError("render: no GroundState of frame " + std::to_string(k) + " within " + std::to_string(options_.input_timeout_s) + " s");
   }
-  if (wait_air_ && !(air = air_.WaitFor(tick.run(), k, timeout))) {
+  if (wait_air_ && !(air = await(air_))) {
     throw InputError("render: no AirState of frame " + std::to_string(k) + " within " + std::to_string(options_.input_timeout_s) + " s");
   }
   std::map<uint32_t, render::Pose> poses, mounts;
   render::WorldView world = BuildWorld(ground ? &*ground : nullptr, air ? &*air : nullptr, stamp.sim_time(), &poses, &mounts);
-  world.debug = debug_.Visible(k, stamp.sim_time());
-  if (std::any_of(cameras_.begin(), cameras_.end(), [](const auto& c) { return c.second->settings.camera.lines_only; })) {
+  world.debug = state_.debug.Visible(k, stamp.sim_time());
+  if (std::any_of(state_.cameras.begin(), state_.cameras.end(), [](const auto& c) { return c.second.settings.camera.lines_only; })) {
     world.cosmos = CosmosLines(ground ? &*ground : nullptr, world);
   }
-  // Cameras due now, grouped: cameras with one pose and one lens share a pass.
-  struct Pass {
-    render::Camera camera;
-    std::vector<CameraRecord*> members;
-  };
-  std::vector<Pass> passes;
-  for (auto& [id, cam] : cameras_) {
-    if (cam->parent) {
-      if (auto p = mounts.find(cam->parent); p != mounts.end()) cam->world_pose = p->second * cam->relative;
-    }
-    const double tick_s = cam->settings.sensor_tick;
-    if (tick_s > 0 && stamp.sim_time() - cam->last_capture < tick_s - 1e-9) continue;
-    render::Pose pose = cam->relative;
-    if (cam->parent) {
-      auto p = mounts.find(cam->parent);
-      if (p == mounts.end()) continue;  // the parent is not in this frame's state (yet)
-      pose = p->second * cam->relative;
-    }
-    render::Camera view = cam->settings.camera;
-    view.exposure = cam->exposure.Multiplier();
-    cam->exposure_dt = cam->last_capture > -1e299 ? stamp.sim_time() - cam->last_capture : 0.0;
-    view.pose = pose;
-    view.previous_pose = cam->last_pose;
-    view.noise_seed = world_.seed() ^ (static_cast<uint64_t>(id) << 32) ^ k;
-    cam->last_capture = stamp.sim_time();
-    cam->last_pose = pose;
-    bool joined = false;
-    for (auto& pass : passes) {
-      const auto& c = pass.camera;
-      if (render::SameLens(c, view) && c.pose.position == view.pose.position &&
-          c.pose.orientation.coeffs() == view.pose.orientation.coeffs() &&
-          c.previous_pose.has_value() == view.previous_pose.has_value()) {
-        if ((view.outputs & render::kOutColor) && !(pass.camera.outputs & render::kOutColor)) render::TakeColourSettings(pass.camera, view);
-        pass.camera.outputs |= view.outputs;
-        pass.members.push_back(cam.get());
-        joined = true;
-        break;
-      }
-    }
-    if (!joined) passes.push_back(Pass{view, {cam.get()}});
-  }
+  // The cameras due now, in passes (cameras with one pose and one lens share one).
+  const std::vector<render::CameraPass> passes = state_.Plan(k, stamp.sim_time(), mounts, world_.seed());
+  // A replay publishes nothing (the process it replaces did): it renders only the passes
+  // whose images change a camera's state (auto-exposure, DVS), so that it ends in the
+  // state the replaced process acknowledged.
   std::vector<render::Camera> views;
-  for (const auto& p : passes) views.push_back(p.camera);
-  renderer_->Render(views, world, [&](std::size_t i, const render::CameraImages& images) {
-    for (CameraRecord* cam : passes[i].members) {
-      const render::Camera& v = passes[i].camera;
-      if (images.color && (render::OutputsFor(cam->settings.kind) & render::kOutColor)) {
-        cam->exposure.Update(images.color, images.width, images.height, v.exposure * std::exp2(v.exposure_compensation), v.gamma,
-                             cam->exposure_dt);
+  std::vector<std::size_t> rendered;
+  for (std::size_t i = 0; i < passes.size(); ++i) {
+    if (replaying() && !state_.NeedsImages(passes[i])) continue;
+    views.push_back(passes[i].camera);
+    rendered.push_back(i);
+  }
+  if (!views.empty()) {
+    renderer_->Render(views, world, [&](std::size_t j, const render::CameraImages& images) {
+      const render::CameraPass& pass = passes[rendered[j]];
+      for (std::size_t m = 0; m < pass.members.size(); ++m) {
+        std::vector<render::DvsEvent> events = state_.Take(pass, m, images, stamp.sim_time());
+        if (replaying()) continue;
+        const render::RigCamera& cam = state_.cameras.at(pass.members[m]);
+        Publish(cam, pass.camera, images, std::move(events), stamp);
+        if (!options_.save_dir.empty() && k % options_.save_every == 0) Save(cam, images, k);
       }
-      Publish(*cam, passes[i].camera, images, stamp);
-      if (!options_.save_dir.empty() && k % options_.save_every == 0) Save(*cam, images, k);
-    }
-  });
-  previous_poses_ = std::move(poses);
+    });
+  }
+  state_.previous_poses = std::move(poses);
 }
 
-void RenderService::Publish(CameraRecord& cam, const render::Camera& view, const render::CameraImages& images,
-                            const msg::FrameStamp& stamp) {
-  msg::Image& img = cam.image;
+void RenderService::Publish(const render::RigCamera& cam, const render::Camera& view, const render::CameraImages& images,
+                            std::vector<render::DvsEvent> events, const msg::FrameStamp& stamp) {
+  CameraOutput& out = outputs_.at(cam.id);
+  msg::Image& img = out.image;
   img.sensor(cam.id);
   img.stamp(stamp);
   img.sensor_pose(FromPose(view.pose));
@@ -670,7 +630,6 @@ void RenderService::Publish(CameraRecord& cam, const render::Camera& view, const
   img.encoding(static_cast<uint32_t>(EncodingOf(cam.settings.kind)));
   const ImageKind kind = cam.settings.kind;
   if (kind == ImageKind::kDvs) {
-    auto events = cam.dvs->Update(images.color, static_cast<std::int64_t>(std::llround(stamp.sim_time() * 1e9)));
     if (events.size() * 16 > render::kMaxImageBytes) events.resize(render::kMaxImageBytes / 16);  // the type's bound
     img.data(render::DvsSensor::Pack(events));
     img.width(static_cast<uint32_t>(events.size()));
@@ -687,12 +646,12 @@ void RenderService::Publish(CameraRecord& cam, const render::Camera& view, const
       for (std::size_t i = 2; i < img.data().size(); i += 4) img.data()[i] = render::ToPaperClass(img.data()[i]);
     }
   }
-  if (!cam.large) {
-    cam.writer.Write(img);
+  if (!out.large) {
+    out.writer.Write(img);
     return;
   }
   // Over Image's bound: the same fields as a LargeImage; the pixels move over and back (no copy).
-  msg::LargeImage& big = cam.large_image;
+  msg::LargeImage& big = out.large_image;
   big.sensor(img.sensor());
   big.stamp(img.stamp());
   big.sensor_pose(img.sensor_pose());
@@ -702,13 +661,14 @@ void RenderService::Publish(CameraRecord& cam, const render::Camera& view, const
   big.encoding(img.encoding());
   big.fov(img.fov());
   big.data().swap(img.data());
-  cam.large_writer.Write(big);
+  out.large_writer.Write(big);
   big.data().swap(img.data());
 }
 
-void RenderService::Save(const CameraRecord& cam, const render::CameraImages& images, uint64_t frame) {
+void RenderService::Save(const render::RigCamera& cam, const render::CameraImages& images, uint64_t frame) {
   namespace fs = std::filesystem;
-  const fs::path dir = fs::path(options_.save_dir) / (std::to_string(cam.id) + (cam.role.empty() ? "" : "_" + cam.role) + "_" +
+  const std::string role = cam.role();
+  const fs::path dir = fs::path(options_.save_dir) / (std::to_string(cam.id) + (role.empty() ? "" : "_" + role) + "_" +
                                                        render::ImageKindName(cam.settings.kind));
   std::error_code ec;
   fs::create_directories(dir, ec);

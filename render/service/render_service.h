@@ -13,10 +13,15 @@
 
 #include "lockstep/render/asset_import.h"
 #include "lockstep/render/camera_config.h"
+#include "lockstep/render/render_state.h"
 #include "lockstep/render/renderer.h"
 #include "lockstep/runtime/declarations.h"
 #include "lockstep/runtime/frame_buffer.h"
 #include "lockstep/runtime/service.h"
+
+namespace CLI {
+class App;
+}
 
 namespace lockstep {
 
@@ -29,10 +34,13 @@ struct RenderOptions {
   double input_timeout_s = 30;          // s to wait for the physics state of a frame
 };
 
-// Parses the render options out of argv (--device, --claim-unowned, --save-dir,
-// --save-every, --asset name=path[,class[,scale]]) and removes them; throws
-// std::invalid_argument naming the option.
-RenderOptions ParseRenderOptions(int* argc, char** argv);
+// The render options on a service's command line (CLI11, beside RunServiceMain's own):
+// --device auto|gpu|cpu, --claim-unowned, --save-dir DIR, --save-every N (N > 0),
+// --asset name=path[,class[,scale]] (repeatable). A bad value fails the parse naming the
+// option and the value.
+void AddRenderOptions(CLI::App& app, RenderOptions& options);
+// One --asset value: name=path[,class[,scale]]. Throws std::invalid_argument naming it.
+render::AssetSpec ParseAssetOption(const std::string& value);
 
 // One DebugDraw command (CARLA's world.debug, AirSim's plotting calls) into `shapes`: its
 // world shapes from `first_frame` on, issued at sim time `issued`; flush_persistent first
@@ -47,21 +55,30 @@ class RenderService final : public ServiceCore {
   void Step(const msg::Tick& tick) override;
   std::vector<msg::BlueprintDeclaration> Blueprints() const override;
   std::string CheckSpawn(const msg::SpawnActor& spawn) const override;
+  // The render state (render::RenderState: camera rig, exposure and DVS state, debug
+  // shapes, weather, spawns, last poses): its hash with every ack, its snapshot for a
+  // replacement process.
+  uint64_t StateHash() const override { return state_.Hash(); }
+  std::vector<uint8_t> SaveState() const override;
+  void RestoreState(const std::vector<uint8_t>& state) override;
 
   const render::DeviceInfo* device() const { return renderer_ ? &renderer_->device() : nullptr; }
-  std::size_t camera_count() const { return cameras_.size(); }
+  std::size_t camera_count() const { return state_.cameras.size(); }
+  const render::RenderState& state() const { return state_; }
 
  private:
-  struct Spawned {
-    std::string blueprint;
-    std::map<std::string, std::string> attributes;
-    uint32_t parent = 0;
-    render::Pose transform;  // relative to the parent (world if none)
+  // A camera's way out: its topic and writer (the rig keeps its state).
+  struct CameraOutput {
+    std::string topic;
+    bool large = false;
+    Writer<msg::Image> writer;             // images within msg::Image's bound ...
+    Writer<msg::LargeImage> large_writer;  // ... or over it (render::kMaxImageBytes): lockstep/sensor/large_image/<id>
+    msg::Image image;  // reused: its buffer keeps its capacity from frame to frame
+    msg::LargeImage large_image;
   };
-  struct CameraRecord;
 
   void Apply(const msg::Command& c, const msg::FrameStamp& stamp);
-  void AddDebugShapes(const msg::DebugDraw& d, uint64_t first_frame, double issued);
+  void OpenOutput(const render::RigCamera& cam);
   render::DebugDrawList CosmosLines(const msg::GroundState* ground, const render::WorldView& world) const;
   void LoadTown(const msg::WorldInfo& world);
   bool Mine(const msg::SpawnActor& s) const;
@@ -71,9 +88,10 @@ class RenderService final : public ServiceCore {
   // box, drones at their centre).
   render::WorldView BuildWorld(const msg::GroundState* ground, const msg::AirState* air, double sim_time,
                                std::map<uint32_t, render::Pose>* poses, std::map<uint32_t, render::Pose>* mounts);
-  std::string ModelFor(uint32_t id, const Spawned& s, const render::Vec3& half_extents);
-  void Publish(CameraRecord& cam, const render::Camera& view, const render::CameraImages& images, const msg::FrameStamp& stamp);
-  void Save(const CameraRecord& cam, const render::CameraImages& images, uint64_t frame);
+  std::string ModelFor(const render::SpawnedActor& s, const render::Vec3& half_extents);
+  void Publish(const render::RigCamera& cam, const render::Camera& view, const render::CameraImages& images,
+               std::vector<render::DvsEvent> events, const msg::FrameStamp& stamp);
+  void Save(const render::RigCamera& cam, const render::CameraImages& images, uint64_t frame);
 
   Bus& bus_;
   std::string name_;
@@ -90,13 +108,10 @@ class RenderService final : public ServiceCore {
   std::map<std::string, std::pair<double, double>> light_heads_;  // traffic light opendrive id -> (height, yaw)
 
   msg::WorldInfo world_;
-  render::Weather weather_;
   bool wait_ground_ = false, wait_air_ = false;
-  std::map<uint32_t, Spawned> spawned_;                      // every actor spawned in the run
-  std::map<uint32_t, std::unique_ptr<CameraRecord>> cameras_;  // the cameras this process owns
-  std::map<uint32_t, render::Pose> previous_poses_;         // actor poses of the last rendered frame
-  render::DebugShapes debug_;                               // world.debug shapes of the run
-  render::DebugDrawList cosmos_map_;                        // the map's lines for cosmos cameras
+  render::RenderState state_;                       // everything that changes future images
+  std::map<uint32_t, CameraOutput> outputs_;        // one per camera of the rig
+  render::DebugDrawList cosmos_map_;                // the map's lines for cosmos cameras
   Reader<msg::MapData> map_reader_;  // last: its callback uses the members above
 };
 

@@ -10,12 +10,12 @@ namespace {
 AttributeSpec F(const std::string& id, double def, double min, double max) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%g", def);
-  return AttributeSpec{id, 'f', buf, min, max, {}};
+  return AttributeSpec{id, AttributeType::kFloat, buf, min, max, {}};
 }
-AttributeSpec I(const std::string& id, int def, double min, double max) { return AttributeSpec{id, 'i', std::to_string(def), min, max, {}}; }
-AttributeSpec B(const std::string& id, bool def) { return AttributeSpec{id, 'b', def ? "true" : "false", 0, 1, {}}; }
+AttributeSpec I(const std::string& id, int def, double min, double max) { return AttributeSpec{id, AttributeType::kInt, std::to_string(def), min, max, {}}; }
+AttributeSpec B(const std::string& id, bool def) { return AttributeSpec{id, AttributeType::kBool, def ? "true" : "false", 0, 1, {}}; }
 AttributeSpec S(const std::string& id, const std::string& def, std::vector<std::string> choices) {
-  return AttributeSpec{id, 's', def, 0, 0, std::move(choices)};
+  return AttributeSpec{id, AttributeType::kString, def, 0, 0, std::move(choices)};
 }
 
 std::vector<AttributeSpec> Basic() {
@@ -71,10 +71,10 @@ std::vector<AttributeSpec> WideAngle(std::vector<AttributeSpec> v) {
   }
   v.push_back(S("camera_model", "perspective",
                 {"perspective", "stereographic", "equidistant", "equisolid", "orthographic", "kannala_brandt"}));
-  v.push_back(AttributeSpec{"k0", 'f', "0.08309221636708493", -100, 100, {}});
-  v.push_back(AttributeSpec{"k1", 'f', "0.01112126630599195", -100, 100, {}});
-  v.push_back(AttributeSpec{"k2", 'f', "0.008587261043925865", -100, 100, {}});
-  v.push_back(AttributeSpec{"k3", 'f', "0.0008542188930970716", -100, 100, {}});
+  v.push_back(AttributeSpec{"k0", AttributeType::kFloat, "0.08309221636708493", -100, 100, {}});
+  v.push_back(AttributeSpec{"k1", AttributeType::kFloat, "0.01112126630599195", -100, 100, {}});
+  v.push_back(AttributeSpec{"k2", AttributeType::kFloat, "0.008587261043925865", -100, 100, {}});
+  v.push_back(AttributeSpec{"k3", AttributeType::kFloat, "0.0008542188930970716", -100, 100, {}});
   v.push_back(F("focal_length", 0, 0, 1e6));
   v.push_back(B("equirectangular", false));
   v.push_back(B("perspective", false));
@@ -151,7 +151,7 @@ CameraSettings ParseCamera(const std::string& blueprint, const std::map<std::str
     if (ec != std::errc() || p != s.data() + s.size() || !std::isfinite(v)) {
       throw std::invalid_argument(blueprint + ": attribute " + id + " = '" + s + "' is not a number");
     }
-    if (a && a->type == 'i' && v != std::floor(v)) throw std::invalid_argument(blueprint + ": attribute " + id + " = '" + s + "' is not an integer");
+    if (a && a->type == AttributeType::kInt && v != std::floor(v)) throw std::invalid_argument(blueprint + ": attribute " + id + " = '" + s + "' is not an integer");
     if (a && (v < a->min || v > a->max)) {
       throw std::invalid_argument(blueprint + ": attribute " + id + " = " + s + " is outside [" + std::to_string(a->min) + ", " +
                                   std::to_string(a->max) + "]");

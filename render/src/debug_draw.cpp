@@ -106,4 +106,32 @@ std::vector<DebugVertex> DebugTriangles(const DebugDrawList& list, const Camera&
   return out;
 }
 
+void DebugShapes::Save(StateOut& out) const {
+  out.Put<std::uint64_t>(items_.size());
+  for (const Item& i : items_) {
+    out.Put<std::uint8_t>(i.point).Put(i.first_frame).Put(i.end);
+    if (i.point) {
+      out.Put(i.pt.location).Put(i.pt.size).Put(i.pt.color[0]).Put(i.pt.color[1]).Put(i.pt.color[2]);
+    } else {
+      out.Put(i.line.begin).Put(i.line.end).Put(i.line.thickness).Put(i.line.color[0]).Put(i.line.color[1]).Put(i.line.color[2]);
+    }
+  }
+}
+
+void DebugShapes::Restore(StateIn& in) {
+  items_.clear();
+  for (std::uint64_t n = in.Count(1 + 8 + 8 + 24 + 8 + 3); n > 0; --n) {
+    Item i;
+    std::uint8_t point = 0;
+    in.Get(point).Get(i.first_frame).Get(i.end);
+    i.point = point != 0;
+    if (i.point) {
+      in.Get(i.pt.location).Get(i.pt.size).Get(i.pt.color[0]).Get(i.pt.color[1]).Get(i.pt.color[2]);
+    } else {
+      in.Get(i.line.begin).Get(i.line.end).Get(i.line.thickness).Get(i.line.color[0]).Get(i.line.color[1]).Get(i.line.color[2]);
+    }
+    items_.push_back(i);
+  }
+}
+
 }  // namespace lockstep::render

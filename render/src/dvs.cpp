@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstring>
 #include <limits>
+#include <sstream>
+#include <stdexcept>
 
 namespace lockstep::render {
 
@@ -69,6 +71,26 @@ std::vector<std::uint8_t> DvsSensor::Pack(const std::vector<DvsEvent>& events) {
     std::memcpy(p + 8, &events[i].t, 8);
   }
   return out;
+}
+
+void DvsSensor::Save(StateOut& out) const {
+  std::ostringstream rng;
+  rng << rng_;
+  out.Put<std::uint8_t>(primed_).Put(last_t_).Put(ref_).Put(prev_).Put(last_event_).Put(rng.str());
+}
+
+void DvsSensor::Restore(StateIn& in) {
+  std::uint8_t primed = 0;
+  std::string rng;
+  in.Get(primed).Get(last_t_).Get(ref_).Get(prev_).Get(last_event_).Get(rng);
+  const std::size_t n = static_cast<std::size_t>(w_) * h_;
+  if (primed && (ref_.size() != n || prev_.size() != n || last_event_.size() != n)) {
+    throw std::invalid_argument("render snapshot: a DVS image of another size than its camera's");
+  }
+  primed_ = primed != 0;
+  std::istringstream text(rng);
+  text >> rng_;
+  if (!text) throw std::invalid_argument("render snapshot: a DVS noise generator that does not read back");
 }
 
 }  // namespace lockstep::render

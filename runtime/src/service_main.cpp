@@ -13,7 +13,8 @@ void OnSignal(int) { g_stop = true; }
 }  // namespace
 
 int RunServiceMain(int argc, char** argv, const std::string& kind, bool perception,
-                   const std::function<std::unique_ptr<ServiceCore>(ServiceContext&)>& make_core) {
+                   const std::function<std::unique_ptr<ServiceCore>(ServiceContext&)>& make_core,
+                   const std::function<void(CLI::App&)>& add_options) {
   CLI::App app{"Lockstep service: " + kind};
   std::string name = kind;
   std::string config_file;
@@ -23,6 +24,7 @@ int RunServiceMain(int argc, char** argv, const std::string& kind, bool percepti
   app.add_option("--config", config_file, "launch config (YAML)")->check(CLI::ExistingFile);
   app.add_option("--domain", domain, "DDS domain id (overrides the config)");
   app.add_option("--participant-profile", profile, "Fast DDS participant profile (overrides the config)");
+  if (add_options) add_options(app);
   CLI11_PARSE(app, argc, argv);
   InitLogging(name);
   std::signal(SIGINT, OnSignal);

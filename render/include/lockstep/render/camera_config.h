@@ -13,10 +13,13 @@
 
 namespace lockstep::render {
 
+// An attribute's type, as blueprint.idl's AttributeDeclaration types it.
+enum class AttributeType { kBool, kInt, kFloat, kString };
+
 struct AttributeSpec {
   std::string id;
-  char type = 'f';  // b(ool) i(nt) f(loat) s(tring)
-  std::string def;
+  AttributeType type = AttributeType::kFloat;
+  std::string def;  // the default as CARLA writes it (exact: the declaration carries this text)
   double min = -1e300, max = 1e300;
   std::vector<std::string> choices;  // restricted values for strings
 };

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "lockstep/render/camera.h"
+#include "lockstep/render/state_io.h"
 #include "lockstep/render/types.h"
 
 namespace lockstep::render {
@@ -51,6 +52,9 @@ class DebugShapes {
   DebugDrawList Visible(std::uint64_t frame, double sim_time);
   void Clear() { items_.clear(); }
   std::size_t size() const { return items_.size(); }
+  // Every shape with its first frame and end (snapshots and the state hash).
+  void Save(StateOut& out) const;
+  void Restore(StateIn& in);
 
  private:
   struct Item {

@@ -6,6 +6,8 @@
 #include <random>
 #include <vector>
 
+#include "lockstep/render/state_io.h"
+
 namespace lockstep::render {
 
 struct DvsParams {  // CARLA's attribute names and defaults
@@ -32,6 +34,11 @@ class DvsSensor {
   // frame only sets the reference and gives none.
   std::vector<DvsEvent> Update(const std::uint8_t* bgra, std::int64_t t_ns);
   static std::vector<std::uint8_t> Pack(const std::vector<DvsEvent>& events);
+  // What the next Update depends on besides its image: the reference and previous
+  // log-intensity images, each pixel's last event time, the previous frame's time and the
+  // threshold noise generator (the parameters and size come from the spawn).
+  void Save(StateOut& out) const;
+  void Restore(StateIn& in);
 
  private:
   double Threshold(bool positive);

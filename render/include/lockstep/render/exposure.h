@@ -16,6 +16,8 @@
 #include <cstdint>
 #include <string>
 
+#include "lockstep/render/state_io.h"
+
 namespace lockstep::render {
 
 inline constexpr double kSceneLuminance = 1.2 * 1024.0;  // cd/m^2 per linear unit (UE: EV100 -> 1.2 * 2^EV100)
@@ -48,6 +50,9 @@ class AutoExposure {
   void Update(const std::uint8_t* bgra, int width, int height, double multiplier, double gamma, double dt);
   // The mean scene luminance (linear units) the last Update measured.
   double measured() const { return measured_; }
+  // The adaptation state (the settings come from the spawn).
+  void Save(StateOut& out) const { out.Put(ev_).Put(measured_); }
+  void Restore(StateIn& in) { in.Get(ev_).Get(measured_); }
 
  private:
   ExposureSettings s_;

@@ -8,6 +8,10 @@
 #include "lockstep/runtime/launch_config.h"
 #include "lockstep/runtime/service.h"
 
+namespace CLI {
+class App;
+}
+
 namespace lockstep {
 
 struct ServiceContext {
@@ -18,7 +22,10 @@ struct ServiceContext {
 };
 
 // make_core builds the core once the bus exists (cores may open readers/writers).
+// add_options adds a service's own options to the command line (CLI11) beside the common
+// ones; they are parsed and checked with them, and --help lists them all.
 int RunServiceMain(int argc, char** argv, const std::string& kind, bool perception,
-                   const std::function<std::unique_ptr<ServiceCore>(ServiceContext&)>& make_core);
+                   const std::function<std::unique_ptr<ServiceCore>(ServiceContext&)>& make_core,
+                   const std::function<void(CLI::App&)>& add_options = {});
 
 }  // namespace lockstep

@@ -17,35 +17,17 @@
 #include "lockstep/runtime/blueprint_builder.h"
 #include "lockstep/runtime/error.h"
 #include "lockstep/runtime/log.h"
+#include "lockstep/runtime/wire_geometry.h"
 
 namespace lockstep {
 namespace {
 
 using render::ImageKind;
 
-render::Pose ToPose(const msg::Pose& p) {
-  render::Pose out;
-  out.position = render::Vec3(p.position().x(), p.position().y(), p.position().z());
-  const auto& q = p.orientation();
-  out.orientation = render::Quat(q.w(), q.x(), q.y(), q.z());
-  if (out.orientation.norm() < 1e-9) out.orientation = render::Quat::Identity();
-  out.orientation.normalize();
-  return out;
-}
-
-msg::Pose FromPose(const render::Pose& p) {
-  msg::Pose out;
-  out.position().x(p.position.x());
-  out.position().y(p.position.y());
-  out.position().z(p.position.z());
-  out.orientation().w(p.orientation.w());
-  out.orientation().x(p.orientation.x());
-  out.orientation().y(p.orientation.y());
-  out.orientation().z(p.orientation.z());
-  return out;
-}
-
-render::Vec3 ToVec(const msg::Vector3& v) { return {v.x(), v.y(), v.z()}; }
+// The wire's geometry (runtime/wire_geometry.h, shared by every service).
+render::Pose ToPose(const msg::Pose& p) { return wire::ToPose<render::Pose>(p); }
+using wire::FromPose;
+using wire::ToVec;
 
 msg::ImageEncoding EncodingOf(ImageKind k) {
   using E = msg::ImageEncoding;
@@ -197,13 +179,7 @@ RenderService::RenderService(Bus& bus, std::string name, RenderOptions options)
       // A replay reads the inputs of past frames: keep what the state topics keep.
       ground_(bus, topics::kGroundState, static_cast<size_t>(QosHistoryDepth(QosKind::kState))),
       air_(bus, topics::kAirState, static_cast<size_t>(QosHistoryDepth(QosKind::kState))),
-      map_reader_(bus, topics::kMap, [this](const msg::MapData& m, const SampleInfo&) {
-        {
-          std::lock_guard<std::mutex> lock(map_mu_);
-          map_ = m;
-        }
-        map_cv_.notify_all();
-      }) {}
+      town_source_(bus) {}
 
 RenderService::~RenderService() = default;
 
@@ -249,16 +225,9 @@ void RenderService::LoadTown(const msg::WorldInfo& world) {
     return;
   }
   if (world.map_hash() == town_hash_) return;
-  std::optional<msg::MapData> data;
-  {
-    std::unique_lock<std::mutex> lock(map_mu_);
-    map_cv_.wait_for(lock, std::chrono::seconds(30), [&] { return map_ && map_->content_hash() == world.map_hash(); });
-    if (map_ && map_->content_hash() == world.map_hash()) data = map_;
-  }
-  if (!data) throw InputError("render: no map '" + world.map_name().to_string() + "' from the coordinator within 30 s");
-  const map::Map town = map::Map::FromString(data->opendrive(), data->name().to_string());
-  const map::Scene scene = data->scene().empty() ? map::GenerateScene(town, world.seed())
-                                                 : map::SceneFromYaml(data->scene(), data->name().to_string() + ".scene.yaml");
+  const std::shared_ptr<const Town> source = town_source_.Load(world, "render");
+  const map::Map& town = source->map;
+  const map::Scene& scene = source->scene;
   const auto meshes = map::BuildWorldMeshes(town, scene);
   renderer_->SetStaticScene(meshes, render::StreetLamps(scene));
   // The cosmos camera's lines of the map (CARLA's CosmosControlSensor: lane routes outside
@@ -278,7 +247,7 @@ void RenderService::LoadTown(const msg::WorldInfo& world) {
     if (p.kind == "traffic_light" && !p.ref.empty()) light_heads_[p.ref] = {p.height > 0 ? p.height : 3.0, p.yaw};
   }
   town_hash_ = world.map_hash();
-  spdlog::info("town '{}': {} triangles, {} cells", data->name().to_string(), renderer_->stats().static_triangles, meshes.size());
+  spdlog::info("town '{}': {} triangles, {} cells", source->name, renderer_->stats().static_triangles, meshes.size());
 }
 
 void RenderService::BeginRun(const msg::WorldInfo& world) {
@@ -523,7 +492,7 @@ render::WorldView RenderService::BuildWorld(const msg::GroundState* ground, cons
   if (air) {
     for (const auto& d : air->drones()) {
       const std::size_t before = w.actors.size();
-      add(d.actor(), d.blueprint().to_string(), ToPose(d.transform()), render::Vec3(0.3, 0.3, 0.1), false);
+      add(d.actor(), d.blueprint().to_string(), ToPose(d.transform()), wire::DroneHalfExtents(), false);
       if (w.actors.size() > before) {
         // Rotor angle from the rotor speed at this frame's time: a pure function of the state.
         for (const auto& r : d.rotors()) w.actors.back().rotor_angles.push_back(std::fmod(r.speed() * sim_time, 2 * M_PI));

@@ -18,6 +18,7 @@
 #include "lockstep/runtime/declarations.h"
 #include "lockstep/runtime/frame_buffer.h"
 #include "lockstep/runtime/service.h"
+#include "lockstep/runtime/town_source.h"
 
 namespace CLI {
 class App;
@@ -101,9 +102,7 @@ class RenderService final : public ServiceCore {
   Declarations declarations_;  // which required services simulate vehicles, walkers, drones
   FrameBuffer<msg::GroundState> ground_;
   FrameBuffer<msg::AirState> air_;
-  std::mutex map_mu_;
-  std::condition_variable map_cv_;
-  std::optional<msg::MapData> map_;
+  TownSource town_source_;  // the coordinator's map, parsed
   uint64_t town_hash_ = 0;
   std::map<std::string, std::pair<double, double>> light_heads_;  // traffic light opendrive id -> (height, yaw)
 
@@ -112,7 +111,6 @@ class RenderService final : public ServiceCore {
   render::RenderState state_;                       // everything that changes future images
   std::map<uint32_t, CameraOutput> outputs_;        // one per camera of the rig
   render::DebugDrawList cosmos_map_;                // the map's lines for cosmos cameras
-  Reader<msg::MapData> map_reader_;  // last: its callback uses the members above
 };
 
 }  // namespace lockstep

@@ -5,20 +5,15 @@
 // that drifts (started with the custom prop three times larger, so its camera sees other
 // images and adapts its exposure otherwise) is detected by the hash check.
 #include <gtest/gtest.h>
-#include <signal.h>
 
-#include <chrono>
-#include <fstream>
-#include <memory>
+#include <string>
+#include <vector>
 
-#include "lockstep/runtime/messages.h"
-#include "observer.h"
 #include "process.h"
+#include "replacement.h"
 
 namespace lockstep::testing {
 namespace {
-
-using namespace std::chrono_literals;
 
 constexpr uint64_t kKillAt = 70, kLastFrame = 160;
 
@@ -46,56 +41,25 @@ std::string Config(int domain) {
          " exposure_min_bright: \"-10\", exposure_max_bright: \"20\", exposure_speed_up: \"0.2\", exposure_speed_down: \"0.2\"}}\n";
 }
 
-struct Outcome {
-  uint64_t world_hash = 0;  // FrameDone.world_hash of the last frame
-  bool diverged = false;    // FrameDone.diverged of the last frame
-  std::string replacement_log;
-  std::string error;
-};
-
 // The coordinator and one render process (asset scale `scale`); with `replacement_scale` > 0
 // the process is killed once frame kKillAt is done and a replacement with that scale started.
-Outcome RunRender(const std::string& name, double scale, double replacement_scale) {
-  Outcome out;
+ReplacementRun RunRender(const std::string& name, double scale, double replacement_scale) {
   const std::string obj = WriteTempFile(name + "-cube.obj", CubeObj());
   const std::string config = WriteTempFile(name + ".yaml", Config(TestDomain()));
   auto argv = [&](double s) {
     return std::vector<std::string>{Bin("lockstep_render"), "--device", "cpu", "--name", "render", "--config", config,
                                     "--asset", "box=" + obj + ",Static," + std::to_string(s)};
   };
-  Process coordinator({Bin("lockstep_coordinator"), config});
-  auto render = std::make_unique<Process>(argv(scale));
-  auto bus = CreateDdsBus({TestDomain(), "", "lockstep.participant.loopback", name});
-  Observer obs(*bus);
-  auto fail = [&](const std::string& what) {
-    if (out.error.empty()) out.error = what + "\ncoordinator:\n" + coordinator.Output() + "\nrender:\n" + render->Output();
-  };
-  std::unique_ptr<Process> replacement;
-  if (replacement_scale > 0) {
-    if (!obs.WaitUntil([&] { return obs.last_frame() >= kKillAt; }, 60s)) fail("frame " + std::to_string(kKillAt) + " never done");
-    render->Signal(SIGKILL);
-    if (!obs.WaitUntil([&] { return obs.status() && obs.status()->state() == msg::RunState::RUN_FAULTED; }, 10s))
-      fail("the run did not fault after the kill");
-    replacement = std::make_unique<Process>(argv(replacement_scale));
-  }
-  if (!obs.WaitUntil([&] { return obs.frames().count(kLastFrame) > 0; }, 90s)) fail("frame " + std::to_string(kLastFrame) + " never done");
-  if (!coordinator.Wait(10s)) fail("the coordinator did not finish");
-  if (replacement) out.replacement_log = replacement->Output();
-  const auto frames = obs.frames();
-  if (frames.count(kLastFrame)) {
-    out.world_hash = frames.at(kLastFrame).world_hash();
-    out.diverged = frames.at(kLastFrame).diverged();
-  }
-  return out;
+  return RunWithReplacement(config, argv(scale), argv(replacement_scale), replacement_scale > 0 ? kKillAt : 0, kLastFrame);
 }
 
 TEST(RenderReplacement, ReplayRestoresTheRunBitForBitAndADriftingReplacementIsDetected) {
-  const Outcome reference = RunRender("render-ref", 1, 0);
+  const ReplacementRun reference = RunRender("render-ref", 1, 0);
   ASSERT_TRUE(reference.error.empty()) << reference.error;
   ASSERT_NE(reference.world_hash, 0u);
   EXPECT_FALSE(reference.diverged);
 
-  const Outcome same = RunRender("render-same", 1, 1);
+  const ReplacementRun same = RunRender("render-same", 1, 1);
   ASSERT_TRUE(same.error.empty()) << same.error;
   // From its snapshot (every 25 frames), not from frame 1, checked by the state hash.
   EXPECT_NE(same.replacement_log.find("restored the snapshot of frame"), std::string::npos) << same.replacement_log;
@@ -104,7 +68,7 @@ TEST(RenderReplacement, ReplayRestoresTheRunBitForBitAndADriftingReplacementIsDe
   EXPECT_FALSE(same.diverged) << same.replacement_log;
   EXPECT_EQ(same.world_hash, reference.world_hash) << "the interrupted run must end in the same state";
 
-  const Outcome drifting = RunRender("render-drift", 1, 3);
+  const ReplacementRun drifting = RunRender("render-drift", 1, 3);
   ASSERT_TRUE(drifting.error.empty()) << drifting.error;
   EXPECT_NE(drifting.replacement_log.find("differs from the acknowledged"), std::string::npos)
       << "a replacement whose camera sees another scene was not detected:\n"

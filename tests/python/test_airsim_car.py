@@ -176,3 +176,13 @@ def test_api_control_is_the_cars_across_processes(car):
     car.setCarControls(airsim.CarControls(throttle=1.0), 'Car2')
     _ticks(car, 1)
     assert car._client.state(car._car('Car2')['id'])['control']['throttle'] == 0
+
+
+def test_a_vehicle_client_addresses_the_cars(car):
+    """SimMode "Car": a VehicleClient's calls are the cars' (there is no drone to address)."""
+    import airsim
+    v = airsim.VehicleClient()
+    assert isinstance(v, airsim.VehicleClient)
+    p = v.simGetVehiclePose('Car1').position
+    assert (p - car.simGetVehiclePose('Car1').position).get_length() < 1e-9
+    assert v.isApiControlEnabled('Car2') == car.isApiControlEnabled('Car2')

@@ -799,6 +799,13 @@ def _plot_life(duration, is_persistent, dt):
 class VehicleClient:
     """AirSim's VehicleClient: the calls every vehicle has."""
 
+    def __new__(cls, *args, **kwargs):
+        # SimMode "Car": AirSim's vehicles are cars, and a VehicleClient's calls address them
+        # (a CarClient, whose VehicleClient calls are the car's).
+        if cls is VehicleClient and settings_mod.load().sim_mode == 'Car':
+            cls = CarClient
+        return super().__new__(cls)
+
     def __init__(self, ip='', port=41451, timeout_value=3600):
         self._ip, self._port, self._timeout = ip, port, timeout_value
         self._client = lockstep.session(timeout=float(os.environ.get('LOCKSTEP_CONNECT_TIMEOUT', '10')))
